@@ -1,0 +1,270 @@
+//! The `cloth3d` command: run the canonical scenes and print their metrics.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use cloth3d::cloth::{Material, PinPreset, Substeps};
+use cloth3d::integrators::Integrator;
+use cloth3d::metrics::{run, RunMetrics};
+use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
+
+#[derive(Parser)]
+#[command(
+    name = "cloth3d",
+    version,
+    about = "Mass-spring cloth for rapier3d and parry3d: run the canonical scenes"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Simulate a scene and print its metrics.
+    Run(RunArgs),
+    /// List the scenes, variants, integrators and materials.
+    List,
+}
+
+#[derive(clap::Args)]
+struct RunArgs {
+    /// Scene name (see `cloth3d list`).
+    #[arg(value_parser = parse_scene)]
+    scene: SceneKind,
+    /// Particles along a row (rows follow the scene's aspect ratio).
+    #[arg(long, value_parser = parse_n)]
+    n: Option<usize>,
+    /// Time integrator.
+    #[arg(long, value_parser = parse_integrator)]
+    integrator: Option<Integrator>,
+    /// Material preset.
+    #[arg(long, value_parser = parse_material)]
+    material: Option<Material>,
+    /// Frame step in seconds.
+    #[arg(long, value_parser = parse_positive)]
+    dt: Option<f32>,
+    /// Substeps per frame: a whole number >= 1, or `auto`.
+    #[arg(long, value_parser = parse_substeps)]
+    substeps: Option<Substeps>,
+    /// Frames to simulate.
+    #[arg(long, value_parser = parse_frames)]
+    frames: Option<u32>,
+    /// Pin variant (the `pins` scene).
+    #[arg(long, value_parser = parse_variant)]
+    variant: Option<PinPreset>,
+    /// Friction coefficient of the obstacles.
+    #[arg(long, value_parser = parse_non_negative)]
+    friction: Option<f32>,
+    /// Print exactly one JSON object and nothing else on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+fn parse_scene(s: &str) -> Result<SceneKind, String> {
+    SceneKind::from_name(s).map_err(|e| e.to_string())
+}
+fn parse_integrator(s: &str) -> Result<Integrator, String> {
+    Integrator::from_name(s).map_err(|e| e.to_string())
+}
+fn parse_material(s: &str) -> Result<Material, String> {
+    Material::by_name(s).map_err(|e| e.to_string())
+}
+fn parse_variant(s: &str) -> Result<PinPreset, String> {
+    PinPreset::from_name(s).map_err(|e| e.to_string())
+}
+fn parse_substeps(s: &str) -> Result<Substeps, String> {
+    s.parse()
+}
+fn parse_number<T: std::str::FromStr>(s: &str, what: &str) -> Result<T, String> {
+    s.parse().map_err(|_| format!("'{s}' is not {what}"))
+}
+fn parse_positive(s: &str) -> Result<f32, String> {
+    let v: f32 = parse_number(s, "a number")?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("'{s}' must be a finite number > 0"))
+    }
+}
+fn parse_non_negative(s: &str) -> Result<f32, String> {
+    let v: f32 = parse_number(s, "a number")?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("'{s}' must be a finite number >= 0"))
+    }
+}
+fn parse_n(s: &str) -> Result<usize, String> {
+    let n: usize = parse_number(s, "a whole number")?;
+    if (2..=4096).contains(&n) {
+        Ok(n)
+    } else {
+        Err(format!("'{s}' must be between 2 and 4096"))
+    }
+}
+fn parse_frames(s: &str) -> Result<u32, String> {
+    let f: u32 = parse_number(s, "a whole number")?;
+    if f >= 1 {
+        Ok(f)
+    } else {
+        Err("frames must be at least 1".into())
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
+                print!("{e}");
+                return ExitCode::SUCCESS;
+            }
+            if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+                eprint!("{e}");
+                return ExitCode::from(2);
+            }
+            eprintln!("{}", one_line(&e.to_string()));
+            return ExitCode::from(2);
+        }
+    };
+    match cli.command {
+        Command::List => {
+            list();
+            ExitCode::SUCCESS
+        }
+        Command::Run(args) => run_command(args),
+    }
+}
+
+/// The first paragraph of a clap error, on one line.
+fn one_line(message: &str) -> String {
+    message
+        .lines()
+        .take_while(|l| !l.trim().is_empty())
+        .map(str::trim)
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+fn list() {
+    println!("scenes:");
+    for s in SceneKind::ALL {
+        let variants = s.variants().iter().map(|v| v.name()).collect::<Vec<_>>();
+        let (c, r) = s.default_grid();
+        print!(
+            "  {:<8} {c}×{r}, {} frames: {}",
+            s.name(),
+            s.default_frames(),
+            s.description()
+        );
+        if !variants.is_empty() {
+            print!(" [variants: {}]", variants.join(", "));
+        }
+        println!();
+    }
+    println!("integrators:");
+    for i in Integrator::ALL {
+        println!("  {}", i.name());
+    }
+    println!("materials:");
+    for m in Material::presets() {
+        println!(
+            "  {:<8} stretch {} N/m, shear {} N/m, bend {} N/m, {} kg/m²",
+            m.name, m.stretch.stiffness, m.shear.stiffness, m.bend.stiffness, m.density
+        );
+    }
+    println!("pin presets:");
+    for p in PinPreset::ALL {
+        println!("  {}", p.name());
+    }
+}
+
+fn run_command(args: RunArgs) -> ExitCode {
+    let options = SceneOptions {
+        n: args.n,
+        integrator: args.integrator,
+        material: args.material,
+        variant: args.variant,
+        dt: args.dt,
+        substeps: args.substeps,
+        frames: args.frames,
+        friction: args.friction,
+    };
+    let mut scene = match Scene::build(args.scene, &options) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let frames = scene.frames;
+    match run(&mut scene, frames) {
+        Ok(m) => {
+            if args.json {
+                match serde_json::to_string(&m) {
+                    Ok(s) => println!("{s}"),
+                    Err(e) => {
+                        eprintln!("error: {e}");
+                        return ExitCode::from(1);
+                    }
+                }
+            } else {
+                print_table(&m);
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn print_table(m: &RunMetrics) {
+    let variant = m
+        .variant
+        .as_deref()
+        .map(|v| format!(" ({v})"))
+        .unwrap_or_default();
+    println!("scene                      {}{variant}", m.scene);
+    println!("grid                       {}×{}", m.grid[0], m.grid[1]);
+    println!("integrator                 {}", m.integrator);
+    println!("material                   {}", m.material);
+    println!(
+        "dt                         {} s × {} frames",
+        m.dt, m.frames
+    );
+    println!("substeps                   {}", m.substeps);
+    if let Some(it) = m.iterations {
+        println!("iterations per frame       {it}");
+    }
+    println!("max_penetration            {:.6} m", m.max_penetration);
+    println!(
+        "max_penetration_any_frame  {:.6} m",
+        m.max_penetration_any_frame
+    );
+    println!(
+        "max_stretch                {:.4} ({:.2}%)",
+        m.max_stretch,
+        100.0 * m.max_stretch
+    );
+    println!("min_y                      {:.4} m", m.min_y);
+    println!(
+        "centroid                   ({:.4}, {:.4}, {:.4}) m",
+        m.centroid[0], m.centroid[1], m.centroid[2]
+    );
+    println!("energy                     {:.4} J", m.energy);
+    println!("finite                     {}", m.finite);
+    println!(
+        "step_wall_s                {:.4} s ({:.3} ms/frame)",
+        m.step_wall_s,
+        1000.0 * m.step_wall_s / m.frames.max(1) as f64
+    );
+    println!(
+        "particle_substeps_per_s    {:.3e}",
+        m.particle_substeps_per_s
+    );
+}

@@ -1,0 +1,140 @@
+//! Obstacles: a parry shape with a pose, a velocity and a friction coefficient.
+
+use parry3d::bounding_volume::Aabb;
+use parry3d::shape::SharedShape;
+
+use crate::error::ClothError;
+use crate::math::{Pose, Rotation, Vector};
+
+/// A shape the cloth collides with.
+///
+/// `pose` is where the shape is at the start of a step; during the step it
+/// moves with the constant velocities `linvel` (of the shape's origin, m/s)
+/// and `angvel` (about the shape's origin, rad/s, world frame). The same
+/// velocities give the surface velocity that friction acts against, so a
+/// moving or spinning obstacle drags the cloth.
+#[derive(Clone)]
+pub struct Obstacle {
+    /// The shape; anything parry can project points on (ball, cuboid, capsule,
+    /// cylinder, convex polyhedron, triangle mesh, heightfield, compound, ...).
+    pub shape: SharedShape,
+    /// Pose at the start of the step.
+    pub pose: Pose,
+    /// Linear velocity of the shape's origin, in m/s.
+    pub linvel: Vector,
+    /// Angular velocity about the shape's origin, in rad/s.
+    pub angvel: Vector,
+    /// Coulomb friction coefficient between cloth and this obstacle.
+    pub friction: f32,
+}
+
+impl std::fmt::Debug for Obstacle {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Obstacle")
+            .field("shape", &self.shape.shape_type())
+            .field("pose", &self.pose)
+            .field("linvel", &self.linvel)
+            .field("angvel", &self.angvel)
+            .field("friction", &self.friction)
+            .finish()
+    }
+}
+
+/// Momentum the cloth gave an obstacle during a step.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ObstacleImpulse {
+    /// Linear impulse, in N·s.
+    pub linear: Vector,
+    /// Angular impulse about the world origin, `Σ p × j`, in N·m·s.
+    pub angular_about_origin: Vector,
+    /// Number of particle contacts that contributed.
+    pub contacts: u32,
+}
+
+impl ObstacleImpulse {
+    /// The angular impulse about `center` (for example a body's centre of mass).
+    pub fn angular_about(&self, center: Vector) -> Vector {
+        self.angular_about_origin - center.cross(self.linear)
+    }
+}
+
+impl Obstacle {
+    /// A static obstacle with friction 0.5.
+    pub fn new(shape: SharedShape, pose: Pose) -> Self {
+        Self {
+            shape,
+            pose,
+            linvel: Vector::ZERO,
+            angvel: Vector::ZERO,
+            friction: 0.5,
+        }
+    }
+
+    /// A static ball of `radius` metres centred on `center`.
+    pub fn ball(center: Vector, radius: f32) -> Self {
+        Self::new(SharedShape::ball(radius), Pose::from_translation(center))
+    }
+
+    /// A static box with the given half-extents (metres) and pose.
+    pub fn cuboid(half_extents: Vector, pose: Pose) -> Self {
+        Self::new(
+            SharedShape::cuboid(half_extents.x, half_extents.y, half_extents.z),
+            pose,
+        )
+    }
+
+    /// Sets the velocities (m/s and rad/s).
+    pub fn with_velocity(mut self, linvel: Vector, angvel: Vector) -> Self {
+        self.linvel = linvel;
+        self.angvel = angvel;
+        self
+    }
+
+    /// Sets the friction coefficient.
+    pub fn with_friction(mut self, friction: f32) -> Self {
+        self.friction = friction;
+        self
+    }
+
+    /// Pose after `t` seconds of the step.
+    pub fn pose_at(&self, t: f32) -> Pose {
+        let rotation = if self.angvel == Vector::ZERO {
+            self.pose.rotation
+        } else {
+            (Rotation::from_scaled_axis(self.angvel * t) * self.pose.rotation).normalize()
+        };
+        Pose::from_parts(self.pose.translation + self.linvel * t, rotation)
+    }
+
+    /// Velocity of the material point of the obstacle at `point`, when its pose is `pose`.
+    pub fn velocity_at(&self, pose: &Pose, point: Vector) -> Vector {
+        self.linvel + self.angvel.cross(point - pose.translation)
+    }
+
+    /// World bounding box of the obstacle over `[0, dt]` of the step.
+    pub fn swept_aabb(&self, dt: f32) -> Aabb {
+        self.shape.compute_swept_aabb(&self.pose, &self.pose_at(dt))
+    }
+
+    /// Checks that the pose, velocities and friction are finite (friction >= 0).
+    pub fn validate(&self, index: usize) -> Result<(), ClothError> {
+        let bad = |reason: &str| ClothError::InvalidObstacle {
+            index,
+            reason: reason.to_string(),
+        };
+        if !(self.pose.translation.is_finite() && self.pose.rotation.is_finite()) {
+            return Err(bad("its pose is not finite"));
+        }
+        if !(self.linvel.is_finite() && self.angvel.is_finite()) {
+            return Err(bad("its velocity is not finite"));
+        }
+        if !(self.friction.is_finite() && self.friction >= 0.0) {
+            return Err(bad("its friction must be a finite number >= 0"));
+        }
+        let aabb = self.shape.compute_local_aabb();
+        if !(aabb.mins.is_finite() && aabb.maxs.is_finite()) {
+            return Err(bad("its shape has a non-finite size"));
+        }
+        Ok(())
+    }
+}

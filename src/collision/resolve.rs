@@ -1,0 +1,226 @@
+//! Resolution of particle and spring contacts against a set of obstacles.
+
+use parry3d::bounding_volume::{Aabb, BoundingVolume};
+use parry3d::partitioning::{Bvh, BvhBuildStrategy};
+
+use super::contact::contact;
+use super::{Obstacle, ObstacleImpulse};
+use crate::cloth::{Particles, SpringKind, Springs};
+use crate::math::{Pose, Vector};
+
+/// Above this many obstacles, candidates come from a bounding-volume tree
+/// instead of a linear scan.
+const BVH_THRESHOLD: usize = 8;
+
+/// Where along a spring the edge test samples.
+const EDGE_SAMPLES: [f32; 3] = [0.25, 0.5, 0.75];
+
+/// No obstacle near a particle.
+const NONE: u32 = u32::MAX;
+
+/// Two contact normals closer than this (cosine) lie on one smooth stretch of
+/// surface, where a spring between two particles outside it stays outside.
+const SMOOTH_COS: f32 = 0.995;
+
+/// Collision scratch memory: obstacle bounds, poses at the current substep,
+/// per-particle proximity flags, and the impulses given to each obstacle.
+#[derive(Debug, Default)]
+pub(crate) struct Collider {
+    aabbs: Vec<Aabb>,
+    poses: Vec<Pose>,
+    bvh: Option<Bvh>,
+    candidates: Vec<u32>,
+    /// Per particle: the obstacle nearest to it this substep (`u32::MAX` for none)
+    /// and the outward normal there.
+    nearest: Vec<u32>,
+    normal: Vec<Vector>,
+    reach: f32,
+    /// Momentum handed to each obstacle during the current step.
+    pub impulses: Vec<ObstacleImpulse>,
+}
+
+impl Collider {
+    /// Prepares a step of `dt` seconds: bounds swept over the step, grown by
+    /// `reach` metres (the thickness plus the longest sampled spring).
+    pub fn begin_step(&mut self, obstacles: &[Obstacle], dt: f32, reach: f32, particles: usize) {
+        self.reach = reach;
+        self.aabbs.clear();
+        self.aabbs
+            .extend(obstacles.iter().map(|o| o.swept_aabb(dt).loosened(reach)));
+        self.bvh = (obstacles.len() > BVH_THRESHOLD)
+            .then(|| Bvh::from_leaves(BvhBuildStrategy::Binned, &self.aabbs));
+        self.impulses.clear();
+        self.impulses
+            .resize(obstacles.len(), ObstacleImpulse::default());
+        self.nearest.resize(particles, NONE);
+        self.normal.resize(particles, Vector::ZERO);
+    }
+
+    /// Obstacle candidates whose bounds contain `point`, into `self.candidates`.
+    fn gather(&mut self, point: Vector) {
+        self.candidates.clear();
+        let query = Aabb::new(point, point);
+        match &self.bvh {
+            Some(bvh) => self.candidates.extend(bvh.intersect_aabb(&query)),
+            None => self.candidates.extend(
+                self.aabbs
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, b)| b.contains_local_point(point))
+                    .map(|(o, _)| o as u32),
+            ),
+        }
+    }
+
+    /// Resolves every contact after a substep of `h` seconds that ended `t`
+    /// seconds into the step.
+    #[allow(clippy::too_many_arguments)]
+    pub fn resolve(
+        &mut self,
+        particles: &mut Particles,
+        springs: &Springs,
+        obstacles: &[Obstacle],
+        t: f32,
+        h: f32,
+        thickness: f32,
+        edges: bool,
+    ) -> u32 {
+        if obstacles.is_empty() {
+            return 0;
+        }
+        self.poses.clear();
+        self.poses.extend(obstacles.iter().map(|o| o.pose_at(t)));
+        let mut contacts = 0;
+        for i in 0..particles.len() {
+            self.nearest[i] = NONE;
+            self.gather(particles.x[i]);
+            let mut nearest_distance = f32::INFINITY;
+            for c in 0..self.candidates.len() {
+                let o = self.candidates[c] as usize;
+                let Some(contact) = contact(&*obstacles[o].shape, &self.poses[o], particles.x[i])
+                else {
+                    continue;
+                };
+                if contact.signed_distance < nearest_distance {
+                    nearest_distance = contact.signed_distance;
+                    self.nearest[i] = o as u32;
+                    self.normal[i] = contact.normal;
+                }
+                if particles.inv_mass[i] != 0.0 && contact.signed_distance < thickness {
+                    self.resolve_particle(particles, i, &obstacles[o], o, contact, h, thickness);
+                    contacts += 1;
+                }
+            }
+        }
+        if edges {
+            for kind in [SpringKind::Stretch, SpringKind::Shear] {
+                for s in springs.range(kind) {
+                    let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
+                    let (oa, ob) = (self.nearest[a], self.nearest[b]);
+                    if oa == NONE && ob == NONE {
+                        continue;
+                    }
+                    // Both ends on one smooth stretch of the same surface: nothing to cut.
+                    if oa == ob && self.normal[a].dot(self.normal[b]) > SMOOTH_COS {
+                        continue;
+                    }
+                    self.resolve_spring(particles, a, b, obstacles, 0.5 * thickness);
+                }
+            }
+        }
+        contacts
+    }
+
+    /// Pushes particle `i` out of obstacle `o` and applies friction.
+    #[allow(clippy::too_many_arguments)]
+    fn resolve_particle(
+        &mut self,
+        p: &mut Particles,
+        i: usize,
+        obstacle: &Obstacle,
+        o: usize,
+        c: super::Contact,
+        h: f32,
+        thickness: f32,
+    ) {
+        let pose = &self.poses[o];
+        let n = c.normal;
+        let new_x = p.x[i] + n * (thickness - c.signed_distance);
+        let surface_v = obstacle.velocity_at(pose, new_x);
+        let v_old = p.v[i];
+        let rel = v_old - surface_v;
+        let vn = rel.dot(n);
+        // The normal velocity taken away bounds what friction may take away.
+        let removed = (-vn).max(0.0);
+        let rel_t = rel - n * vn;
+        let slip = rel_t.length();
+        let limit = obstacle.friction * removed;
+        let rel_t_new = if slip <= limit {
+            Vector::ZERO
+        } else {
+            rel_t * (1.0 - limit / slip)
+        };
+        let v_new = surface_v + n * vn.max(0.0) + rel_t_new;
+        // Undo the slip friction forbade during this substep.
+        p.x[i] = new_x + (rel_t_new - rel_t) * h;
+        p.v[i] = v_new;
+        let j = (v_old - v_new) * p.mass[i];
+        let imp = &mut self.impulses[o];
+        imp.linear += j;
+        imp.angular_about_origin += new_x.cross(j);
+        imp.contacts += 1;
+    }
+
+    /// Keeps the samples of the spring `a`–`b` at least `margin` outside every obstacle.
+    fn resolve_spring(
+        &mut self,
+        p: &mut Particles,
+        a: usize,
+        b: usize,
+        obstacles: &[Obstacle],
+        margin: f32,
+    ) {
+        let (wa, wb) = (p.inv_mass[a], p.inv_mass[b]);
+        if wa == 0.0 && wb == 0.0 {
+            return;
+        }
+        for t in EDGE_SAMPLES {
+            let sample = p.x[a] * (1.0 - t) + p.x[b] * t;
+            self.gather(sample);
+            for c in 0..self.candidates.len() {
+                let o = self.candidates[c] as usize;
+                let obstacle = &obstacles[o];
+                let pose = &self.poses[o];
+                let Some(contact) = contact(&*obstacle.shape, pose, sample) else {
+                    continue;
+                };
+                if contact.signed_distance >= margin {
+                    continue;
+                }
+                let (ca, cb) = ((1.0 - t) * wa, t * wb);
+                let denom = (1.0 - t) * ca + t * cb;
+                if denom <= 0.0 {
+                    continue;
+                }
+                let n = contact.normal;
+                let push = n * ((margin - contact.signed_distance) / denom);
+                for (i, w) in [(a, ca), (b, cb)] {
+                    if w == 0.0 {
+                        continue;
+                    }
+                    p.x[i] += push * w;
+                    let surface_v = obstacle.velocity_at(pose, p.x[i]);
+                    let vn = (p.v[i] - surface_v).dot(n);
+                    if vn < 0.0 {
+                        let dv = -n * vn;
+                        p.v[i] += dv;
+                        let j = -dv * p.mass[i];
+                        let imp = &mut self.impulses[o];
+                        imp.linear += j;
+                        imp.angular_about_origin += p.x[i].cross(j);
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,168 @@
+//! The one error type of the library: every failure a user can cause.
+
+use thiserror::Error;
+
+/// Everything that can go wrong when building or stepping a cloth.
+///
+/// Each message says what was wrong and what is allowed, so it can be shown
+/// to a user as it is.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ClothError {
+    /// The grid has fewer than 2 columns or rows.
+    #[error("invalid grid {cols}×{rows}: a cloth needs at least 2×2 particles")]
+    GridTooSmall {
+        /// Requested number of columns.
+        cols: usize,
+        /// Requested number of rows.
+        rows: usize,
+    },
+    /// The grid is larger than the index type allows.
+    #[error("invalid grid {cols}×{rows}: at most {max} particles are supported")]
+    GridTooLarge {
+        /// Requested number of columns.
+        cols: usize,
+        /// Requested number of rows.
+        rows: usize,
+        /// The largest particle count allowed.
+        max: usize,
+    },
+    /// A numeric parameter is NaN, infinite or outside its allowed range.
+    #[error("invalid {name} = {value}: expected {expected}")]
+    InvalidParameter {
+        /// Which parameter (for example `dt` or `stretch stiffness`).
+        name: &'static str,
+        /// The value that was given.
+        value: f64,
+        /// What is allowed, in words (for example `a finite number > 0`).
+        expected: &'static str,
+    },
+    /// A vector or pose parameter has a NaN or infinite component.
+    #[error("invalid {name}: every component must be finite")]
+    NonFinite {
+        /// Which parameter.
+        name: &'static str,
+    },
+    /// A particle index is out of range.
+    #[error("particle index {index} out of range: the cloth has {count} particles (0..{count})")]
+    ParticleOutOfRange {
+        /// The index given.
+        index: usize,
+        /// The number of particles.
+        count: usize,
+    },
+    /// A (row, column) pair is outside the grid.
+    #[error("grid cell (row {row}, column {col}) out of range: the grid has {rows} rows and {cols} columns")]
+    CellOutOfRange {
+        /// Row given.
+        row: usize,
+        /// Column given.
+        col: usize,
+        /// Rows of the grid.
+        rows: usize,
+        /// Columns of the grid.
+        cols: usize,
+    },
+    /// The operation needs a grid cloth (rows and columns) but this one was built from parts.
+    #[error("this cloth was built from parts and has no grid: use particle indices")]
+    NotAGrid,
+    /// A spring or triangle refers to itself or repeats a particle.
+    #[error("invalid {what} {index}: {reason}")]
+    InvalidTopology {
+        /// `spring` or `triangle`.
+        what: &'static str,
+        /// Its index in the list given.
+        index: usize,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// Lists given together have different lengths.
+    #[error("{what}: expected {expected} entries, got {got}")]
+    LengthMismatch {
+        /// What was given.
+        what: &'static str,
+        /// Expected length.
+        expected: usize,
+        /// Given length.
+        got: usize,
+    },
+    /// An obstacle cannot be used.
+    #[error("invalid obstacle {index}: {reason}")]
+    InvalidObstacle {
+        /// Index of the obstacle in the slice given to the step.
+        index: usize,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The state stopped being finite during a step; the cloth was restored to
+    /// its state before the step.
+    #[error("the {integrator} integrator diverged at dt = {dt} s with {substeps} substeps (state restored to before the step); try --substeps {suggested_substeps} or a larger value, or an implicit integrator (implicit-euler, fast-mass-spring)")]
+    Diverged {
+        /// Name of the integrator that diverged.
+        integrator: &'static str,
+        /// Frame step used, in seconds.
+        dt: f32,
+        /// Substeps used.
+        substeps: u32,
+        /// Substep count estimated to be stable for this cloth.
+        suggested_substeps: u32,
+    },
+    /// A name (scene, integrator, material, variant) is not known.
+    #[error("unknown {what} '{name}': valid choices are {valid}")]
+    UnknownName {
+        /// What kind of name (`scene`, `integrator`, ...).
+        what: &'static str,
+        /// The name given.
+        name: String,
+        /// The valid choices, comma-separated.
+        valid: String,
+    },
+    /// A rapier handle refers to a body or collider that no longer exists.
+    #[error("stale rapier handle: the {what} {handle} no longer exists in the set")]
+    StaleHandle {
+        /// `rigid body` or `collider`.
+        what: &'static str,
+        /// The handle, formatted.
+        handle: String,
+    },
+    /// The linear solver of an implicit integrator could not be built.
+    #[error("linear solver failed: {0}")]
+    Solver(String),
+}
+
+/// Checks that `value` is finite and strictly positive.
+pub(crate) fn positive(name: &'static str, value: f32) -> Result<f32, ClothError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(ClothError::InvalidParameter {
+            name,
+            value: value as f64,
+            expected: "a finite number > 0",
+        })
+    }
+}
+
+/// Checks that `value` is finite and not negative.
+pub(crate) fn non_negative(name: &'static str, value: f32) -> Result<f32, ClothError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(ClothError::InvalidParameter {
+            name,
+            value: value as f64,
+            expected: "a finite number >= 0",
+        })
+    }
+}
+
+/// Checks that every component of `v` is finite.
+pub(crate) fn finite_vec(
+    name: &'static str,
+    v: crate::math::Vector,
+) -> Result<crate::math::Vector, ClothError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(ClothError::NonFinite { name })
+    }
+}

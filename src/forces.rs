@@ -1,0 +1,116 @@
+//! Forces: gravity, springs with damping, wind on triangles, air drag.
+//!
+//! Every function here is pure: it reads positions and velocities and adds
+//! forces (N) or accelerations (m/s²) into a buffer.
+
+use crate::cloth::{SpringKind, SpringParams, Springs, Wind};
+use crate::math::Vector;
+
+/// Force on particle `a` from a spring joining it to `b`, in newtons:
+/// `k (|x_ab| - L) d + c ((v_b - v_a)·d) d` with `d` the unit vector from `a`
+/// to `b`. Particle `b` feels the opposite force. Zero when the two ends coincide.
+#[inline(always)]
+pub fn spring_force(
+    xa: Vector,
+    xb: Vector,
+    va: Vector,
+    vb: Vector,
+    rest: f32,
+    params: SpringParams,
+) -> Vector {
+    let d = xb - xa;
+    let len2 = d.length_squared();
+    if len2 <= f32::MIN_POSITIVE {
+        return Vector::ZERO;
+    }
+    let inv_len = len2.sqrt().recip();
+    let dir = d * inv_len;
+    let len = len2 * inv_len;
+    let magnitude = params.stiffness * (len - rest) + params.damping * (vb - va).dot(dir);
+    dir * magnitude
+}
+
+/// Total wind force on a triangle, in newtons: `c A (n·d) n` with `c` the
+/// wind strength (N/m²), `A` the area, `n` the unit normal and `d` the unit
+/// wind direction. Each corner gets a third of it. Zero for a degenerate
+/// triangle or calm wind.
+#[inline]
+pub fn wind_force_on_triangle(p0: Vector, p1: Vector, p2: Vector, wind: &Wind) -> Vector {
+    let Some(dir) = wind.direction.try_normalize() else {
+        return Vector::ZERO;
+    };
+    let cross = (p1 - p0).cross(p2 - p0);
+    let twice_area = cross.length();
+    if twice_area <= f32::MIN_POSITIVE {
+        return Vector::ZERO;
+    }
+    let n = cross / twice_area;
+    n * (wind.strength * 0.5 * twice_area * n.dot(dir))
+}
+
+/// Adds the spring forces (elastic and damping) of every spring into `f`.
+pub(crate) fn add_spring_forces(
+    springs: &Springs,
+    params: &[SpringParams; 3],
+    x: &[Vector],
+    v: &[Vector],
+    f: &mut [Vector],
+) {
+    let (a, b, rest) = (&springs.a[..], &springs.b[..], &springs.rest[..]);
+    for kind in SpringKind::ALL {
+        let p = params[kind.index()];
+        let range = springs.range(kind);
+        let (a, b, rest) = (&a[range.clone()], &b[range.clone()], &rest[range]);
+        for s in 0..a.len() {
+            let (i, j) = (a[s] as usize, b[s] as usize);
+            let force = spring_force(x[i], x[j], v[i], v[j], rest[s], p);
+            f[i] += force;
+            f[j] -= force;
+        }
+    }
+}
+
+/// Adds the wind force of every triangle into `f`.
+pub(crate) fn add_wind_forces(triangles: &[[u32; 3]], wind: &Wind, x: &[Vector], f: &mut [Vector]) {
+    if wind.is_calm() {
+        return;
+    }
+    for t in triangles {
+        let [i, j, k] = t.map(|i| i as usize);
+        let share = wind_force_on_triangle(x[i], x[j], x[k], wind) / 3.0;
+        f[i] += share;
+        f[j] += share;
+        f[k] += share;
+    }
+}
+
+/// Everything needed to turn positions and velocities into accelerations.
+pub(crate) struct ForceModel<'a> {
+    pub springs: &'a Springs,
+    pub spring_params: [SpringParams; 3],
+    pub triangles: &'a [[u32; 3]],
+    pub mass: &'a [f32],
+    pub inv_mass: &'a [f32],
+    pub gravity: Vector,
+    pub air_drag: f32,
+    pub wind: Wind,
+}
+
+impl<'a> ForceModel<'a> {
+    /// Total force on every particle, in newtons, written into `f`.
+    pub fn forces(&self, x: &[Vector], v: &[Vector], f: &mut [Vector]) {
+        for i in 0..f.len() {
+            f[i] = (self.gravity - v[i] * self.air_drag) * self.mass[i];
+        }
+        add_spring_forces(self.springs, &self.spring_params, x, v, f);
+        add_wind_forces(self.triangles, &self.wind, x, f);
+    }
+
+    /// Acceleration of every particle, in m/s², written into `a`; zero for pinned particles.
+    pub fn accelerations(&self, x: &[Vector], v: &[Vector], a: &mut [Vector]) {
+        self.forces(x, v, a);
+        for (ai, &w) in a.iter_mut().zip(self.inv_mass) {
+            *ai *= w;
+        }
+    }
+}

@@ -1,0 +1,139 @@
+//! What every run reports (SCENES.md): penetration, stretch, position, finiteness, speed.
+
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use crate::cloth::{Cloth, SpringKind};
+use crate::collision::{penetration_depth, Obstacle};
+use crate::error::ClothError;
+use crate::scenes::Scene;
+
+/// The deepest any particle lies inside any obstacle's surface, in metres (0 when none is inside).
+pub fn max_penetration(cloth: &Cloth, obstacles: &[Obstacle]) -> f32 {
+    let mut deepest = 0.0f32;
+    for o in obstacles {
+        let aabb = o.shape.compute_aabb(&o.pose);
+        for &p in cloth.positions() {
+            if aabb.contains_local_point(p) {
+                deepest = deepest.max(penetration_depth(&*o.shape, &o.pose, p));
+            }
+        }
+    }
+    deepest
+}
+
+/// The largest `length / rest length - 1` over the stretch springs.
+pub fn max_stretch(cloth: &Cloth) -> f32 {
+    cloth.max_strain(SpringKind::Stretch)
+}
+
+/// The metrics of one run of a scene, as `cloth3d run --json` prints them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunMetrics {
+    /// Scene name.
+    pub scene: String,
+    /// Pin variant, when the scene has one.
+    pub variant: Option<String>,
+    /// Particles along a row.
+    pub n: usize,
+    /// Grid as (columns, rows).
+    pub grid: [usize; 2],
+    /// Integrator name.
+    pub integrator: String,
+    /// Material name.
+    pub material: String,
+    /// Frame step, in seconds.
+    pub dt: f32,
+    /// Substeps per frame (the largest used, when chosen automatically).
+    pub substeps: u32,
+    /// Solver iterations per frame, for the integrators that iterate.
+    pub iterations: Option<u32>,
+    /// Frames simulated.
+    pub frames: u32,
+    /// Deepest particle inside any obstacle on the final frame, in metres.
+    pub max_penetration: f32,
+    /// Deepest particle inside any obstacle over all frames, in metres.
+    pub max_penetration_any_frame: f32,
+    /// Largest stretch-spring strain on the final frame.
+    pub max_stretch: f32,
+    /// Lowest particle height on the final frame, in metres.
+    pub min_y: f32,
+    /// Centre of the cloth on the final frame, in metres.
+    pub centroid: [f32; 3],
+    /// Total energy on the final frame (kinetic + gravity + elastic), in joules.
+    pub energy: f64,
+    /// False if any position or velocity became NaN or infinite.
+    pub finite: bool,
+    /// Wall time spent stepping, in seconds.
+    pub step_wall_s: f64,
+    /// Particles × substeps simulated per second of stepping.
+    pub particle_substeps_per_s: f64,
+}
+
+/// Runs a scene for `frames` frames and gathers its metrics.
+///
+/// A diverging step ends the run with its error; the scene keeps its last finite state.
+pub fn run(scene: &mut Scene, frames: u32) -> Result<RunMetrics, ClothError> {
+    run_with(scene, frames, |_, _| {})
+}
+
+/// Like [`run`], calling `on_frame(scene, frame)` after every frame.
+pub fn run_with(
+    scene: &mut Scene,
+    frames: u32,
+    mut on_frame: impl FnMut(&Scene, u32),
+) -> Result<RunMetrics, ClothError> {
+    let mut wall = 0.0f64;
+    let mut substeps_total = 0u64;
+    let mut max_substeps = 0u32;
+    let mut iterations = 0u64;
+    let mut deepest_any = 0.0f32;
+    for f in 0..frames {
+        let start = Instant::now();
+        let report = scene.step_frame()?;
+        wall += start.elapsed().as_secs_f64();
+        substeps_total += report.substeps as u64;
+        max_substeps = max_substeps.max(report.substeps);
+        iterations += report.iterations as u64;
+        deepest_any = deepest_any.max(scene.max_penetration());
+        on_frame(scene, f);
+    }
+    let cloth = &scene.cloth;
+    let grid = cloth
+        .grid()
+        .map(|g| [g.cols, g.rows])
+        .unwrap_or([cloth.particle_count(), 1]);
+    let min_y = cloth
+        .positions()
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::INFINITY, f32::min);
+    let c = cloth.centroid();
+    let iterative = iterations > 0;
+    Ok(RunMetrics {
+        scene: scene.kind.name().to_string(),
+        variant: scene.variant.map(|v| v.name().to_string()),
+        n: grid[0],
+        grid,
+        integrator: cloth.params.integrator.name().to_string(),
+        material: cloth.material.name.clone(),
+        dt: scene.dt,
+        substeps: max_substeps,
+        iterations: iterative.then(|| (iterations / frames.max(1) as u64) as u32),
+        frames,
+        max_penetration: scene.max_penetration(),
+        max_penetration_any_frame: deepest_any,
+        max_stretch: max_stretch(cloth),
+        min_y,
+        centroid: [c.x, c.y, c.z],
+        energy: cloth.energy().total(),
+        finite: cloth.is_finite(),
+        step_wall_s: wall,
+        particle_substeps_per_s: if wall > 0.0 {
+            cloth.particle_count() as f64 * substeps_total as f64 / wall
+        } else {
+            0.0
+        },
+    })
+}
