@@ -3,7 +3,7 @@
 //! Every function here is pure: it reads positions and velocities and adds
 //! forces (N) or accelerations (m/s²) into a buffer.
 
-use crate::cloth::{SpringKind, SpringParams, Springs, Wind};
+use crate::cloth::{Cloth, SpringKind, SpringParams, Springs, Wind};
 use crate::math::Vector;
 
 /// Force on particle `a` from a spring joining it to `b`, in newtons:
@@ -112,5 +112,33 @@ impl<'a> ForceModel<'a> {
         for (ai, &w) in a.iter_mut().zip(self.inv_mass) {
             *ai *= w;
         }
+    }
+}
+
+impl Cloth {
+    /// The total force on every particle at the current state, in newtons
+    /// (gravity, springs with damping, wind, drag; pinned particles included).
+    pub fn forces(&self) -> Vec<Vector> {
+        let mut f = vec![Vector::ZERO; self.particle_count()];
+        self.forces_into(&mut f);
+        f
+    }
+
+    /// Like [`Cloth::forces`], into a buffer; does nothing if its length is not the particle count.
+    pub fn forces_into(&self, f: &mut [Vector]) {
+        if f.len() != self.particle_count() {
+            return;
+        }
+        let model = ForceModel {
+            springs: &self.springs,
+            spring_params: SpringKind::ALL.map(|k| self.material.params(k)),
+            triangles: &self.triangles,
+            mass: &self.particles.mass,
+            inv_mass: &self.particles.inv_mass,
+            gravity: self.params.gravity,
+            air_drag: self.params.air_drag,
+            wind: self.params.wind,
+        };
+        model.forces(&self.particles.x, &self.particles.v, f);
     }
 }

@@ -14,6 +14,9 @@ use crate::math::Vector;
 pub const MAX_SPEED: f32 = 1.0e4;
 /// See [`MAX_SPEED`].
 pub const MAX_DISTANCE: f32 = 1.0e7;
+/// A stretch spring longer than `1 + MAX_STRAIN` times its rest length after a
+/// step means the step exploded: no cloth stretches to eleven times its length.
+pub const MAX_STRAIN: f32 = 10.0;
 
 /// What a step did.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
@@ -39,7 +42,8 @@ impl Cloth {
     ///
     /// The step is split into substeps; each integrates the forces with the
     /// current integrator and then resolves contacts. If the new state is not
-    /// finite (or has exploded beyond [`MAX_SPEED`]), the cloth is put back as
+    /// finite, or has exploded (a speed over [`MAX_SPEED`], a distance over
+    /// [`MAX_DISTANCE`], a stretch over [`MAX_STRAIN`]), the cloth is put back as
     /// it was before the step and [`ClothError::Diverged`] says which
     /// integrator diverged and how many substeps would be stable.
     pub fn step(&mut self, dt: f32, obstacles: &[Obstacle]) -> Result<StepReport, ClothError> {
@@ -116,7 +120,9 @@ impl Cloth {
     fn state_is_sane(&self) -> bool {
         let ok_v = |v: &Vector| v.is_finite() && v.length_squared() < MAX_SPEED * MAX_SPEED;
         let ok_x = |x: &Vector| x.is_finite() && x.length_squared() < MAX_DISTANCE * MAX_DISTANCE;
-        self.particles.x.iter().all(ok_x) && self.particles.v.iter().all(ok_v)
+        self.particles.x.iter().all(ok_x)
+            && self.particles.v.iter().all(ok_v)
+            && self.max_strain(SpringKind::Stretch) < MAX_STRAIN
     }
 }
 

@@ -34,7 +34,7 @@ struct RunArgs {
     #[arg(value_parser = parse_scene)]
     scene: SceneKind,
     /// Particles along a row (rows follow the scene's aspect ratio).
-    #[arg(long, value_parser = parse_n)]
+    #[arg(long, value_parser = parse_n, allow_hyphen_values = true)]
     n: Option<usize>,
     /// Time integrator.
     #[arg(long, value_parser = parse_integrator)]
@@ -43,19 +43,19 @@ struct RunArgs {
     #[arg(long, value_parser = parse_material)]
     material: Option<Material>,
     /// Frame step in seconds.
-    #[arg(long, value_parser = parse_positive)]
+    #[arg(long, value_parser = parse_positive, allow_hyphen_values = true)]
     dt: Option<f32>,
     /// Substeps per frame: a whole number >= 1, or `auto`.
     #[arg(long, value_parser = parse_substeps)]
     substeps: Option<Substeps>,
     /// Frames to simulate.
-    #[arg(long, value_parser = parse_frames)]
+    #[arg(long, value_parser = parse_frames, allow_hyphen_values = true)]
     frames: Option<u32>,
     /// Pin variant (the `pins` scene).
     #[arg(long, value_parser = parse_variant)]
     variant: Option<PinPreset>,
     /// Friction coefficient of the obstacles.
-    #[arg(long, value_parser = parse_non_negative)]
+    #[arg(long, value_parser = parse_non_negative, allow_hyphen_values = true)]
     friction: Option<f32>,
     /// Print exactly one JSON object and nothing else on stdout.
     #[arg(long)]

@@ -1,0 +1,36 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use cloth3d::prelude::*;
+
+/// A material whose stretch springs have stiffness `k` (N/m) and damping `c` (N·s/m).
+pub fn spring_material(k: f32, c: f32) -> Material {
+    let mut m = Material::cotton();
+    m.stretch = SpringParams::new(k, c);
+    m
+}
+
+/// One particle of mass `m` (kg) hanging on a spring of stiffness `k` and
+/// damping `c` from a pinned particle at the origin; rest length 1 m,
+/// stretched by `amplitude` m; no gravity, no drag.
+pub fn oscillator(m: f32, k: f32, c: f32, amplitude: f32, integrator: Integrator) -> Cloth {
+    let springs = vec![Spring {
+        a: 0,
+        b: 1,
+        rest_length: 1.0,
+        kind: SpringKind::Stretch,
+    }];
+    let positions = vec![Vector::ZERO, Vector::new(1.0 + amplitude, 0.0, 0.0)];
+    let mut cloth = Cloth::from_parts(positions, vec![1.0, m], springs, vec![], spring_material(k, c)).unwrap();
+    cloth.pin(0).unwrap();
+    cloth.params.gravity = Vector::ZERO;
+    cloth.params.air_drag = 0.0;
+    cloth.params.substeps = Substeps::Fixed(1);
+    cloth.set_integrator(integrator);
+    cloth
+}
+
+/// Displacement of the oscillator's free particle from rest, in metres.
+pub fn displacement(cloth: &Cloth) -> f32 {
+    cloth.positions()[1].x - 1.0
+}

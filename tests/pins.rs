@@ -1,0 +1,90 @@
+//! Pins: presets, pinning at run time, and a hanging cloth coming to rest.
+
+use cloth3d::prelude::*;
+
+#[test]
+fn presets_pin_the_figures_of_the_scenes() {
+    let cells = |p: PinPreset| p.cells(33, 33);
+    assert_eq!(cells(PinPreset::Center), vec![(16, 16)]);
+    assert_eq!(cells(PinPreset::TwoCorners), vec![(0, 0), (0, 32)]);
+    assert_eq!(cells(PinPreset::FourCorners), vec![(0, 0), (0, 32), (32, 0), (32, 32)]);
+    assert_eq!(cells(PinPreset::FourCenter), vec![(8, 8), (8, 24), (24, 8), (24, 24)]);
+    assert_eq!(cells(PinPreset::CenterRow).len(), 33);
+    assert!(cells(PinPreset::CenterRow).iter().all(|&(r, _)| r == 16));
+    assert!(PinPreset::FlagColumn.cells(32, 20).iter().all(|&(_, c)| c == 0));
+    assert_eq!(PinPreset::CurtainRow.cells(40, 40).len(), 40);
+    for p in PinPreset::ALL {
+        assert_eq!(PinPreset::from_name(p.name()).unwrap(), p);
+    }
+}
+
+#[test]
+fn pinned_particles_never_move_and_unpinned_ones_fall() {
+    let mut cloth = ClothBuilder::new(10, 10).pins(PinPreset::TwoCorners).build().unwrap();
+    let pinned = cloth.pinned();
+    assert_eq!(pinned, vec![0, 9]);
+    let before: Vec<Vector> = pinned.iter().map(|&i| cloth.positions()[i]).collect();
+    let far_corner = cloth.positions()[99];
+    for integrator in Integrator::ALL {
+        cloth.set_integrator(integrator);
+        for _ in 0..20 {
+            cloth.step(1.0 / 60.0, &[]).unwrap();
+        }
+    }
+    for (k, &i) in pinned.iter().enumerate() {
+        assert_eq!(cloth.positions()[i], before[k], "pinned particle {i} moved");
+    }
+    // The far corner is free: it swings down through the pins' plane, a 1 m pendulum.
+    let moved = (cloth.positions()[99] - far_corner).length();
+    assert!(moved > 0.5, "far corner moved only {moved} m");
+    // Unpin at run time: the corner falls too.
+    cloth.unpin_cell(0, 9).unwrap();
+    for _ in 0..30 {
+        cloth.step(1.0 / 60.0, &[]).unwrap();
+    }
+    assert!(cloth.positions()[9].y < before[1].y - 0.05);
+    assert_eq!(cloth.positions()[0], before[0]);
+    // Pin by index while moving: it stops where it is.
+    cloth.pin(50).unwrap();
+    let here = cloth.positions()[50];
+    cloth.step(1.0 / 60.0, &[]).unwrap();
+    assert_eq!(cloth.positions()[50], here);
+}
+
+#[test]
+fn out_of_range_pins_are_errors() {
+    let mut cloth = ClothBuilder::new(4, 3).build().unwrap();
+    assert!(matches!(cloth.pin(12), Err(ClothError::ParticleOutOfRange { index: 12, count: 12 })));
+    assert!(matches!(cloth.pin_cell(3, 0), Err(ClothError::CellOutOfRange { .. })));
+    assert!(matches!(cloth.pin_cell(0, 4), Err(ClothError::CellOutOfRange { .. })));
+    assert!(ClothBuilder::new(4, 3).pin(99).build().is_err());
+    assert!(cloth.pinned().is_empty(), "a failed pin must leave the cloth as it was");
+}
+
+#[test]
+fn cloth_pinned_along_its_top_row_comes_to_rest_with_bounded_stretch() {
+    let mut cloth = ClothBuilder::new(16, 16)
+        .vertical(Vector::new(0.0, 1.0, 0.0))
+        .pins(PinPreset::CurtainRow)
+        .build()
+        .unwrap();
+    cloth.params.air_drag = 2.0;
+    let top: Vec<Vector> = (0..16).map(|c| cloth.positions()[c]).collect();
+    // Give it a push so it has something to come to rest from.
+    for i in 16..cloth.particle_count() {
+        cloth.set_velocity(i, Vector::new(0.0, 0.0, 1.0)).unwrap();
+    }
+    for _ in 0..600 {
+        cloth.step(1.0 / 60.0, &[]).unwrap();
+    }
+    let e = cloth.energy();
+    assert!(e.kinetic < 1e-4, "still moving: {} J kinetic", e.kinetic);
+    let stretch = cloth.max_strain(SpringKind::Stretch);
+    assert!(stretch > 0.0 && stretch < 0.05, "max stretch {stretch}");
+    for c in 0..16 {
+        assert_eq!(cloth.positions()[c], top[c]);
+    }
+    // It hangs straight down from the rail.
+    let bottom = cloth.positions()[15 * 16 + 8];
+    assert!(bottom.z.abs() < 0.01 && bottom.y < 0.6, "bottom middle at {bottom:?}");
+}
