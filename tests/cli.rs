@@ -3,13 +3,20 @@
 use std::process::Command;
 
 fn cloth3d(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_cloth3d")).args(args).output().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_cloth3d"))
+        .args(args)
+        .output()
+        .unwrap()
 }
 
 #[test]
 fn run_json_prints_exactly_one_object_with_every_metric() {
     let out = cloth3d(&["run", "drape", "--n", "16", "--frames", "30", "--json"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let stdout = String::from_utf8(out.stdout).unwrap();
     assert_eq!(stdout.trim().lines().count(), 1, "{stdout}");
     let v: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
@@ -39,10 +46,24 @@ fn run_json_prints_exactly_one_object_with_every_metric() {
 
 #[test]
 fn run_prints_a_table_by_default() {
-    let out = cloth3d(&["run", "pins", "--variant", "four", "--frames", "5", "--integrator", "rk4", "--material", "denim"]);
+    let out = cloth3d(&[
+        "run",
+        "pins",
+        "--variant",
+        "four",
+        "--frames",
+        "5",
+        "--integrator",
+        "rk4",
+        "--material",
+        "denim",
+    ]);
     assert!(out.status.success());
     let stdout = String::from_utf8(out.stdout).unwrap();
-    assert!(stdout.contains("pins (four)") && stdout.contains("rk4") && stdout.contains("denim"), "{stdout}");
+    assert!(
+        stdout.contains("pins (four)") && stdout.contains("rk4") && stdout.contains("denim"),
+        "{stdout}"
+    );
     assert!(stdout.contains("max_stretch"));
 }
 
@@ -51,7 +72,19 @@ fn list_names_every_choice() {
     let out = cloth3d(&["list"]);
     assert!(out.status.success());
     let stdout = String::from_utf8(out.stdout).unwrap();
-    for name in ["drape", "box", "flag", "pins", "symplectic-euler", "explicit-euler", "verlet", "rk4", "silk", "leather", "center-row"] {
+    for name in [
+        "drape",
+        "box",
+        "flag",
+        "pins",
+        "symplectic-euler",
+        "explicit-euler",
+        "verlet",
+        "rk4",
+        "silk",
+        "leather",
+        "center-row",
+    ] {
         assert!(stdout.contains(name), "list lacks {name}");
     }
 }
@@ -60,7 +93,10 @@ fn list_names_every_choice() {
 fn bad_arguments_get_one_line_and_status_2() {
     for (args, expect) in [
         (vec!["run", "nosuch"], "drape, box, flag"),
-        (vec!["run", "drape", "--integrator", "leapfrog"], "symplectic-euler"),
+        (
+            vec!["run", "drape", "--integrator", "leapfrog"],
+            "symplectic-euler",
+        ),
         (vec!["run", "drape", "--material", "kevlar"], "silk, cotton"),
         (vec!["run", "drape", "--dt", "-1"], "> 0"),
         (vec!["run", "drape", "--dt", "abc"], "not a number"),
@@ -84,10 +120,23 @@ fn bad_arguments_get_one_line_and_status_2() {
 
 #[test]
 fn a_diverging_run_says_so_on_one_line_and_exits_1() {
-    let out = cloth3d(&["run", "drape", "--n", "32", "--integrator", "explicit-euler", "--substeps", "1", "--json"]);
+    let out = cloth3d(&[
+        "run",
+        "drape",
+        "--n",
+        "32",
+        "--integrator",
+        "explicit-euler",
+        "--substeps",
+        "1",
+        "--json",
+    ]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
-    assert!(stderr.contains("explicit-euler") && stderr.contains("--substeps"), "{stderr}");
+    assert!(
+        stderr.contains("explicit-euler") && stderr.contains("--substeps"),
+        "{stderr}"
+    );
     assert!(out.stdout.is_empty(), "no NaN figures on stdout");
 }

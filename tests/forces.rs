@@ -12,10 +12,14 @@ fn scrambled_cloth() -> Cloth {
     cloth.material.shear.damping = 0.2;
     for i in 0..cloth.particle_count() {
         let s = i as f32;
-        let p = cloth.positions()[i] + Vector::new((s * 1.7).sin(), (s * 0.9).cos(), (s * 2.3).sin()) * 0.03;
+        let p = cloth.positions()[i]
+            + Vector::new((s * 1.7).sin(), (s * 0.9).cos(), (s * 2.3).sin()) * 0.03;
         cloth.set_position(i, p).unwrap();
         cloth
-            .set_velocity(i, Vector::new((s * 0.7).cos(), (s * 1.3).sin(), (s * 0.4).cos()))
+            .set_velocity(
+                i,
+                Vector::new((s * 0.7).cos(), (s * 1.3).sin(), (s * 0.4).cos()),
+            )
             .unwrap();
     }
     cloth
@@ -27,8 +31,14 @@ fn internal_spring_forces_sum_to_zero() {
     let f = cloth.forces();
     let sum: Vector = f.iter().copied().sum();
     let largest = f.iter().map(|f| f.length()).fold(0.0, f32::max);
-    assert!(largest > 1.0, "the scrambled cloth should be under real tension ({largest} N)");
-    assert!(sum.length() < 1e-4 * largest * f.len() as f32, "net internal force {sum:?}");
+    assert!(
+        largest > 1.0,
+        "the scrambled cloth should be under real tension ({largest} N)"
+    );
+    assert!(
+        sum.length() < 1e-4 * largest * f.len() as f32,
+        "net internal force {sum:?}"
+    );
 }
 
 #[test]
@@ -42,7 +52,10 @@ fn momentum_is_conserved_without_external_forces() {
             cloth.step(1.0 / 60.0, &[]).unwrap();
         }
         let p = cloth.momentum();
-        assert!((p - p0).length() < 1e-3 * (1.0 + p0.length()), "{integrator}: momentum {p0:?} became {p:?}");
+        assert!(
+            (p - p0).length() < 1e-3 * (1.0 + p0.length()),
+            "{integrator}: momentum {p0:?} became {p:?}"
+        );
     }
 }
 
@@ -52,12 +65,28 @@ fn spring_force_is_hooke_plus_damping_along_the_spring() {
     let xa = Vector::ZERO;
     let xb = Vector::new(0.0, 1.2, 0.0);
     let f = spring_force(xa, xb, Vector::ZERO, Vector::ZERO, 1.0, params);
-    assert!((f - Vector::new(0.0, 10.0, 0.0)).length() < 1e-4, "stretched by 0.2: {f:?}");
+    assert!(
+        (f - Vector::new(0.0, 10.0, 0.0)).length() < 1e-4,
+        "stretched by 0.2: {f:?}"
+    );
     // Separating at 1 m/s along the spring: damping pulls a toward b by c·1.
-    let f = spring_force(xa, xb, Vector::ZERO, Vector::new(0.3, 1.0, 0.0), 1.2, params);
-    assert!((f - Vector::new(0.0, 2.0, 0.0)).length() < 1e-4, "damping only: {f:?}");
+    let f = spring_force(
+        xa,
+        xb,
+        Vector::ZERO,
+        Vector::new(0.3, 1.0, 0.0),
+        1.2,
+        params,
+    );
+    assert!(
+        (f - Vector::new(0.0, 2.0, 0.0)).length() < 1e-4,
+        "damping only: {f:?}"
+    );
     // Coincident ends give no force rather than NaN.
-    assert_eq!(spring_force(xa, xa, Vector::ZERO, Vector::X, 1.0, params), Vector::ZERO);
+    assert_eq!(
+        spring_force(xa, xa, Vector::ZERO, Vector::X, 1.0, params),
+        Vector::ZERO
+    );
 }
 
 #[test]
@@ -71,8 +100,15 @@ fn wind_pushes_along_the_normal_in_proportion_to_n_dot_d() {
         let wind = Wind::new(d * 3.0, 8.0);
         let f = wind_force_on_triangle(p0, p1, p2, &wind);
         let expected = 8.0 * 0.5 * n.dot(d);
-        assert!(f.cross(n).length() < 1e-5, "{deg}°: force {f:?} not along the normal");
-        assert!((f.dot(n) - expected).abs() < 1e-5, "{deg}°: {} N, expected {expected} N", f.dot(n));
+        assert!(
+            f.cross(n).length() < 1e-5,
+            "{deg}°: force {f:?} not along the normal"
+        );
+        assert!(
+            (f.dot(n) - expected).abs() < 1e-5,
+            "{deg}°: {} N, expected {expected} N",
+            f.dot(n)
+        );
     }
     // Wind in the triangle's plane exerts nothing.
     let f = wind_force_on_triangle(p0, p1, p2, &Wind::new(Vector::new(1.0, 1.0, 0.0), 8.0));
@@ -81,7 +117,10 @@ fn wind_pushes_along_the_normal_in_proportion_to_n_dot_d() {
 
 #[test]
 fn wind_moves_a_free_cloth_along_the_normal_component() {
-    let mut cloth = ClothBuilder::new(6, 6).vertical(Vector::ZERO).build().unwrap();
+    let mut cloth = ClothBuilder::new(6, 6)
+        .vertical(Vector::ZERO)
+        .build()
+        .unwrap();
     cloth.params.gravity = Vector::ZERO;
     cloth.params.wind = Wind::new(Vector::new(1.0, 0.0, 1.0), 4.0);
     for _ in 0..10 {
@@ -90,5 +129,8 @@ fn wind_moves_a_free_cloth_along_the_normal_component() {
     let c = cloth.centroid();
     // The cloth faces +z: it moves along +z only.
     assert!(c.z > 0.01, "centroid {c:?}");
-    assert!(c.x.abs() < 1e-3 * c.z.abs().max(1.0), "moved sideways: {c:?}");
+    assert!(
+        c.x.abs() < 1e-3 * c.z.abs().max(1.0),
+        "moved sideways: {c:?}"
+    );
 }

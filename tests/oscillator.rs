@@ -27,11 +27,19 @@ fn upward_crossings(cloth: &mut Cloth, h: f32, steps: usize) -> Vec<f64> {
 fn period_matches_two_pi_sqrt_m_over_k() {
     let (m, k) = (0.5f32, 200.0f32);
     let expected = 2.0 * std::f64::consts::PI * (m as f64 / k as f64).sqrt();
-    for integrator in [Integrator::SymplecticEuler, Integrator::Verlet, Integrator::Rk4] {
+    for integrator in [
+        Integrator::SymplecticEuler,
+        Integrator::Verlet,
+        Integrator::Rk4,
+    ] {
         let mut cloth = oscillator(m, k, 0.0, 0.05, integrator);
         let h = 1.0e-3;
         let crossings = upward_crossings(&mut cloth, h, 5000);
-        assert!(crossings.len() >= 5, "{integrator}: only {} crossings", crossings.len());
+        assert!(
+            crossings.len() >= 5,
+            "{integrator}: only {} crossings",
+            crossings.len()
+        );
         let periods = crossings.len() - 1;
         let measured = (crossings[periods] - crossings[0]) / periods as f64;
         let error = (measured - expected).abs() / expected;
@@ -50,7 +58,11 @@ fn damped_amplitude_follows_the_exponential_envelope() {
     let a0 = 0.1f32;
     let rate = c as f64 / (2.0 * m as f64);
     let omega_d = ((k / m) as f64 - rate * rate).sqrt();
-    for integrator in [Integrator::SymplecticEuler, Integrator::Verlet, Integrator::Rk4] {
+    for integrator in [
+        Integrator::SymplecticEuler,
+        Integrator::Verlet,
+        Integrator::Rk4,
+    ] {
         let mut cloth = oscillator(m, k, c, a0, integrator);
         let h = 2.0e-4;
         let mut peaks = Vec::new();
@@ -85,7 +97,11 @@ fn symplectic_integrators_keep_energy_bounded_while_explicit_euler_gains() {
     let (m, k) = (1.0f32, 100.0f32);
     let h = 1.0e-3; // h ω = 0.01
     let mut totals = Vec::new();
-    for integrator in [Integrator::SymplecticEuler, Integrator::Verlet, Integrator::ExplicitEuler] {
+    for integrator in [
+        Integrator::SymplecticEuler,
+        Integrator::Verlet,
+        Integrator::ExplicitEuler,
+    ] {
         let mut cloth = oscillator(m, k, 0.0, 0.1, integrator);
         let e0 = cloth.energy().total();
         let mut worst = 0.0f64;
@@ -97,9 +113,17 @@ fn symplectic_integrators_keep_energy_bounded_while_explicit_euler_gains() {
         totals.push((integrator, worst, drift));
     }
     for &(integrator, worst, _) in &totals[..2] {
-        assert!(worst < 0.01, "{integrator}: energy strayed {:.3}% from its start", 100.0 * worst);
+        assert!(
+            worst < 0.01,
+            "{integrator}: energy strayed {:.3}% from its start",
+            100.0 * worst
+        );
     }
     let (_, _, euler_drift) = totals[2];
     // (1 + h²ω²)^10000 = e^1: forward Euler almost triples the energy.
-    assert!(euler_drift > 1.0, "explicit Euler gained only {:.1}%", 100.0 * euler_drift);
+    assert!(
+        euler_drift > 1.0,
+        "explicit Euler gained only {:.1}%",
+        100.0 * euler_drift
+    );
 }

@@ -7,11 +7,20 @@ fn presets_pin_the_figures_of_the_scenes() {
     let cells = |p: PinPreset| p.cells(33, 33);
     assert_eq!(cells(PinPreset::Center), vec![(16, 16)]);
     assert_eq!(cells(PinPreset::TwoCorners), vec![(0, 0), (0, 32)]);
-    assert_eq!(cells(PinPreset::FourCorners), vec![(0, 0), (0, 32), (32, 0), (32, 32)]);
-    assert_eq!(cells(PinPreset::FourCenter), vec![(8, 8), (8, 24), (24, 8), (24, 24)]);
+    assert_eq!(
+        cells(PinPreset::FourCorners),
+        vec![(0, 0), (0, 32), (32, 0), (32, 32)]
+    );
+    assert_eq!(
+        cells(PinPreset::FourCenter),
+        vec![(8, 8), (8, 24), (24, 8), (24, 24)]
+    );
     assert_eq!(cells(PinPreset::CenterRow).len(), 33);
     assert!(cells(PinPreset::CenterRow).iter().all(|&(r, _)| r == 16));
-    assert!(PinPreset::FlagColumn.cells(32, 20).iter().all(|&(_, c)| c == 0));
+    assert!(PinPreset::FlagColumn
+        .cells(32, 20)
+        .iter()
+        .all(|&(_, c)| c == 0));
     assert_eq!(PinPreset::CurtainRow.cells(40, 40).len(), 40);
     for p in PinPreset::ALL {
         assert_eq!(PinPreset::from_name(p.name()).unwrap(), p);
@@ -20,7 +29,10 @@ fn presets_pin_the_figures_of_the_scenes() {
 
 #[test]
 fn pinned_particles_never_move_and_unpinned_ones_fall() {
-    let mut cloth = ClothBuilder::new(10, 10).pins(PinPreset::TwoCorners).build().unwrap();
+    let mut cloth = ClothBuilder::new(10, 10)
+        .pins(PinPreset::TwoCorners)
+        .build()
+        .unwrap();
     let pinned = cloth.pinned();
     assert_eq!(pinned, vec![0, 9]);
     let before: Vec<Vector> = pinned.iter().map(|&i| cloth.positions()[i]).collect();
@@ -54,11 +66,26 @@ fn pinned_particles_never_move_and_unpinned_ones_fall() {
 #[test]
 fn out_of_range_pins_are_errors() {
     let mut cloth = ClothBuilder::new(4, 3).build().unwrap();
-    assert!(matches!(cloth.pin(12), Err(ClothError::ParticleOutOfRange { index: 12, count: 12 })));
-    assert!(matches!(cloth.pin_cell(3, 0), Err(ClothError::CellOutOfRange { .. })));
-    assert!(matches!(cloth.pin_cell(0, 4), Err(ClothError::CellOutOfRange { .. })));
+    assert!(matches!(
+        cloth.pin(12),
+        Err(ClothError::ParticleOutOfRange {
+            index: 12,
+            count: 12
+        })
+    ));
+    assert!(matches!(
+        cloth.pin_cell(3, 0),
+        Err(ClothError::CellOutOfRange { .. })
+    ));
+    assert!(matches!(
+        cloth.pin_cell(0, 4),
+        Err(ClothError::CellOutOfRange { .. })
+    ));
     assert!(ClothBuilder::new(4, 3).pin(99).build().is_err());
-    assert!(cloth.pinned().is_empty(), "a failed pin must leave the cloth as it was");
+    assert!(
+        cloth.pinned().is_empty(),
+        "a failed pin must leave the cloth as it was"
+    );
 }
 
 #[test]
@@ -86,5 +113,8 @@ fn cloth_pinned_along_its_top_row_comes_to_rest_with_bounded_stretch() {
     }
     // It hangs straight down from the rail.
     let bottom = cloth.positions()[15 * 16 + 8];
-    assert!(bottom.z.abs() < 0.01 && bottom.y < 0.6, "bottom middle at {bottom:?}");
+    assert!(
+        bottom.z.abs() < 0.01 && bottom.y < 0.6,
+        "bottom middle at {bottom:?}"
+    );
 }

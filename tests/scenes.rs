@@ -22,7 +22,10 @@ fn drape_rests_on_the_ball() {
     // Resting on the ball: its top is at 0.3 + thickness, the skirt hangs below.
     assert!(m.min_y < 0.0 && m.min_y > -0.35, "{m:?}");
     assert!(m.centroid[1] > 0.0 && m.centroid[1] < 0.3, "{m:?}");
-    assert!(m.centroid[0].abs() < 0.01 && m.centroid[2].abs() < 0.01, "{m:?}");
+    assert!(
+        m.centroid[0].abs() < 0.01 && m.centroid[2].abs() < 0.01,
+        "{m:?}"
+    );
 }
 
 #[test]
@@ -53,7 +56,11 @@ fn pins_variants_hang_from_their_pins() {
         );
         assert_eq!(m.variant.as_deref(), Some(variant.name()));
         // The cloth hangs below its pins at y = 0.6 and does not fall away.
-        assert!(m.centroid[1] < 0.6 && m.min_y > -0.6, "{}: {m:?}", variant.name());
+        assert!(
+            m.centroid[1] < 0.6 && m.min_y > -0.6,
+            "{}: {m:?}",
+            variant.name()
+        );
     }
 }
 

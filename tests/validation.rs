@@ -4,12 +4,29 @@ use cloth3d::prelude::*;
 
 #[test]
 fn builder_rejects_bad_grids_sizes_and_masses() {
-    assert!(matches!(ClothBuilder::new(1, 5).build(), Err(ClothError::GridTooSmall { cols: 1, rows: 5 })));
-    assert!(matches!(ClothBuilder::new(5, 0).build(), Err(ClothError::GridTooSmall { .. })));
-    assert!(matches!(ClothBuilder::new(usize::MAX, 3).build(), Err(ClothError::GridTooLarge { .. })));
-    for (w, h) in [(0.0, 1.0), (1.0, -2.0), (f32::NAN, 1.0), (1.0, f32::INFINITY)] {
+    assert!(matches!(
+        ClothBuilder::new(1, 5).build(),
+        Err(ClothError::GridTooSmall { cols: 1, rows: 5 })
+    ));
+    assert!(matches!(
+        ClothBuilder::new(5, 0).build(),
+        Err(ClothError::GridTooSmall { .. })
+    ));
+    assert!(matches!(
+        ClothBuilder::new(usize::MAX, 3).build(),
+        Err(ClothError::GridTooLarge { .. })
+    ));
+    for (w, h) in [
+        (0.0, 1.0),
+        (1.0, -2.0),
+        (f32::NAN, 1.0),
+        (1.0, f32::INFINITY),
+    ] {
         let err = ClothBuilder::new(4, 4).size(w, h).build().unwrap_err();
-        assert!(matches!(err, ClothError::InvalidParameter { .. }), "{w}×{h}: {err}");
+        assert!(
+            matches!(err, ClothError::InvalidParameter { .. }),
+            "{w}×{h}: {err}"
+        );
     }
     for m in [0.0, -1.0, f32::NAN] {
         let err = ClothBuilder::new(4, 4).total_mass(m).build().unwrap_err();
@@ -30,11 +47,19 @@ fn materials_reject_bad_stiffness_damping_and_density() {
     assert!(err.to_string().contains("stretch stiffness"), "{err}");
     let mut m = Material::cotton();
     m.bend.damping = -1.0;
-    assert!(ClothBuilder::new(4, 4).material(m).build().unwrap_err().to_string().contains("bend damping"));
+    assert!(ClothBuilder::new(4, 4)
+        .material(m)
+        .build()
+        .unwrap_err()
+        .to_string()
+        .contains("bend damping"));
     let mut m = Material::cotton();
     m.density = f32::NAN;
     assert!(m.validate().is_err());
-    assert!(Material::by_name("kevlar").unwrap_err().to_string().contains("silk"));
+    assert!(Material::by_name("kevlar")
+        .unwrap_err()
+        .to_string()
+        .contains("silk"));
     for m in Material::presets() {
         m.validate().unwrap();
         assert_eq!(Material::by_name(&m.name).unwrap(), m);
@@ -49,7 +74,10 @@ fn step_rejects_bad_parameters_and_keeps_the_cloth() {
         assert!(cloth.step(dt, &[]).is_err(), "dt = {dt}");
     }
     cloth.params.gravity = Vector::new(0.0, f32::NAN, 0.0);
-    assert!(matches!(cloth.step(0.01, &[]), Err(ClothError::NonFinite { .. })));
+    assert!(matches!(
+        cloth.step(0.01, &[]),
+        Err(ClothError::NonFinite { .. })
+    ));
     cloth.params.gravity = Vector::new(0.0, -9.81, 0.0);
     cloth.params.substeps = Substeps::Fixed(0);
     assert!(cloth.step(0.01, &[]).is_err());
@@ -58,10 +86,17 @@ fn step_rejects_bad_parameters_and_keeps_the_cloth() {
     assert!(cloth.step(0.01, &[]).is_err());
     cloth.material.shear.stiffness = 150.0;
     let bad = Obstacle::ball(Vector::new(f32::NAN, 0.0, 0.0), 0.3);
-    assert!(matches!(cloth.step(0.01, &[bad]), Err(ClothError::InvalidObstacle { index: 0, .. })));
+    assert!(matches!(
+        cloth.step(0.01, &[bad]),
+        Err(ClothError::InvalidObstacle { index: 0, .. })
+    ));
     let bad = Obstacle::ball(Vector::ZERO, 0.3).with_friction(-1.0);
     assert!(cloth.step(0.01, &[bad]).is_err());
-    assert_eq!(cloth.positions(), before.positions(), "a rejected step must not move anything");
+    assert_eq!(
+        cloth.positions(),
+        before.positions(),
+        "a rejected step must not move anything"
+    );
     assert!(cloth.step(0.01, &[]).is_ok());
 }
 
@@ -115,7 +150,9 @@ fn from_parts_checks_every_index() {
         kind: SpringKind::Stretch,
     };
     let pos = vec![Vector::ZERO, Vector::X];
-    let mk = |springs, tris, masses: Vec<f32>| Cloth::from_parts(pos.clone(), masses, springs, tris, Material::cotton());
+    let mk = |springs, tris, masses: Vec<f32>| {
+        Cloth::from_parts(pos.clone(), masses, springs, tris, Material::cotton())
+    };
     assert!(mk(vec![spring(0, 2, 1.0)], vec![], vec![1.0, 1.0]).is_err());
     assert!(mk(vec![spring(1, 1, 1.0)], vec![], vec![1.0, 1.0]).is_err());
     assert!(mk(vec![spring(0, 1, 0.0)], vec![], vec![1.0, 1.0]).is_err());

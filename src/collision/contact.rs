@@ -2,6 +2,8 @@
 
 use parry3d::shape::Shape;
 
+use glam::DVec3;
+
 use crate::math::{Pose, Vector};
 
 /// The closest point of a shape's surface to a query point.
@@ -22,11 +24,22 @@ const ON_SURFACE: f32 = 1.0e-6;
 /// The contact of `point` with `shape` at `pose`; `None` only if the shape
 /// cannot answer (non-finite data).
 ///
+/// Balls and cuboids are answered analytically in double precision (the
+/// same surface point as parry's projection, with a normal that stays exact a
+/// hair away from the surface); every other shape goes through parry's
+/// `project_local_point`.
+///
 /// Degenerate cases get a sensible normal, never NaN: a point at a ball's
 /// centre is pushed out along `+y`; a point exactly on an edge or corner gets
 /// the feature's normal (or the direction from the shape's centre).
 pub fn contact(shape: &dyn Shape, pose: &Pose, point: Vector) -> Option<Contact> {
     let local = pose.inverse_transform_point(point);
+    if let Some(ball) = shape.as_ball() {
+        return ball_contact(ball.radius, pose, point);
+    }
+    if let Some(cuboid) = shape.as_cuboid() {
+        return cuboid_contact(cuboid.half_extents, pose, point);
+    }
     let proj = shape.project_local_point(local, false);
     let (surface, normal, signed) = if proj.point.is_finite() {
         let offset = local - proj.point;
@@ -58,12 +71,89 @@ pub fn contact(shape: &dyn Shape, pose: &Pose, point: Vector) -> Option<Contact>
     })
 }
 
+/// The query point in the shape's frame, in double precision, so that the
+/// normal stays exact even a hair away from the surface.
+fn local_f64(pose: &Pose, point: Vector) -> DVec3 {
+    pose.rotation
+        .as_dquat()
+        .normalize()
+        .inverse()
+        .mul_vec3(point.as_dvec3() - pose.translation.as_dvec3())
+}
+
+/// Back to world coordinates, in single precision.
+fn to_world(pose: &Pose, point: DVec3, normal: DVec3, signed: f64) -> Option<Contact> {
+    let q = pose.rotation.as_dquat().normalize();
+    let contact = Contact {
+        point: (q.mul_vec3(point) + pose.translation.as_dvec3()).as_vec3(),
+        normal: q.mul_vec3(normal).as_vec3(),
+        signed_distance: signed as f32,
+    };
+    (contact.point.is_finite() && contact.normal.is_finite() && contact.signed_distance.is_finite())
+        .then_some(contact)
+}
+
+/// A ball, analytically: `c + r (p - c)/|p - c|`; the centre pushes out along the world's up.
+fn ball_contact(radius: f32, pose: &Pose, point: Vector) -> Option<Contact> {
+    let local = local_f64(pose, point);
+    let r = radius as f64;
+    let dist = local.length();
+    let normal = if dist > 1e-12 {
+        local / dist
+    } else {
+        pose.inverse_transform_vector(Vector::Y)
+            .as_dvec3()
+            .normalize()
+    };
+    to_world(pose, normal * r, normal, dist - r)
+}
+
+/// A cuboid, analytically: the clamp of the point to the box when outside,
+/// the nearest face when inside.
+fn cuboid_contact(half: Vector, pose: &Pose, point: Vector) -> Option<Contact> {
+    let local = local_f64(pose, point);
+    let h = half.as_dvec3();
+    let clamped = local.clamp(-h, h);
+    if clamped != local {
+        let offset = local - clamped;
+        let dist = offset.length();
+        return to_world(pose, clamped, offset / dist, dist);
+    }
+    let gaps = h - local.abs();
+    let axis = if gaps.x <= gaps.y && gaps.x <= gaps.z {
+        0
+    } else if gaps.y <= gaps.z {
+        1
+    } else {
+        2
+    };
+    let sign = if local[axis] >= 0.0 { 1.0 } else { -1.0 };
+    let mut normal = DVec3::ZERO;
+    normal[axis] = sign;
+    let mut surface = local;
+    surface[axis] = h[axis] * sign;
+    to_world(pose, surface, normal, -gaps[axis])
+}
+
 /// Outward normal at a local point lying on the surface.
 fn surface_normal(shape: &dyn Shape, local: Vector) -> Option<Vector> {
-    let (proj, feature) = shape.project_local_point_and_get_feature(local);
-    if let Some(n) = shape.feature_normal_at_point(0, feature, proj.point) {
-        if let Some(n) = n.try_normalize() {
-            return Some(n);
+    use parry3d::shape::ShapeType;
+    // Some shapes (heightfields, rounded shapes) do not report features.
+    let reports_features = matches!(
+        shape.shape_type(),
+        ShapeType::Capsule
+            | ShapeType::Cylinder
+            | ShapeType::Cone
+            | ShapeType::ConvexPolyhedron
+            | ShapeType::Triangle
+            | ShapeType::TriMesh
+    );
+    if reports_features {
+        let (proj, feature) = shape.project_local_point_and_get_feature(local);
+        if let Some(n) = shape.feature_normal_at_point(0, feature, proj.point) {
+            if let Some(n) = n.try_normalize() {
+                return Some(n);
+            }
         }
     }
     let center = shape.compute_local_aabb().center();

@@ -21,7 +21,14 @@ pub fn oscillator(m: f32, k: f32, c: f32, amplitude: f32, integrator: Integrator
         kind: SpringKind::Stretch,
     }];
     let positions = vec![Vector::ZERO, Vector::new(1.0 + amplitude, 0.0, 0.0)];
-    let mut cloth = Cloth::from_parts(positions, vec![1.0, m], springs, vec![], spring_material(k, c)).unwrap();
+    let mut cloth = Cloth::from_parts(
+        positions,
+        vec![1.0, m],
+        springs,
+        vec![],
+        spring_material(k, c),
+    )
+    .unwrap();
     cloth.pin(0).unwrap();
     cloth.params.gravity = Vector::ZERO;
     cloth.params.air_drag = 0.0;
