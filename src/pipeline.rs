@@ -74,8 +74,15 @@ impl Cloth {
             ..Default::default()
         };
         for s in 0..k {
-            integrators::substep(self, h);
             let t = (s + 1) as f32 * h;
+            self.workspace.collider.set_time(obstacles, t);
+            report.iterations += match integrators::substep(self, h, obstacles) {
+                Ok(it) => it,
+                Err(e) => {
+                    self.restore_backup();
+                    return Err(e);
+                }
+            };
             let Cloth {
                 particles,
                 springs,
@@ -87,7 +94,6 @@ impl Cloth {
                 particles,
                 springs,
                 obstacles,
-                t,
                 h,
                 params.thickness,
                 params.edge_collisions,
@@ -95,10 +101,7 @@ impl Cloth {
         }
         if !self.state_is_sane() {
             let integrator = self.params.integrator;
-            let ws = &self.workspace;
-            self.particles.x.copy_from_slice(&ws.backup_x);
-            self.particles.v.copy_from_slice(&ws.backup_v);
-            self.particles.x_prev.copy_from_slice(&ws.backup_prev);
+            self.restore_backup();
             let suggested = stable_substeps(self, integrator, dt).max(2 * k);
             return Err(ClothError::Diverged {
                 integrator: integrator.name(),
@@ -115,6 +118,20 @@ impl Cloth {
     /// as the obstacles passed to [`Cloth::step`]).
     pub fn obstacle_impulses(&self) -> &[ObstacleImpulse] {
         &self.workspace.collider.impulses
+    }
+
+    /// How many times the fast mass-spring solver has computed its Cholesky
+    /// factor for this cloth (it is reused while pins, masses, step and
+    /// stiffness stay the same).
+    pub fn factorizations(&self) -> u64 {
+        self.workspace.factorizations()
+    }
+
+    fn restore_backup(&mut self) {
+        let ws = &self.workspace;
+        self.particles.x.copy_from_slice(&ws.backup_x);
+        self.particles.v.copy_from_slice(&ws.backup_v);
+        self.particles.x_prev.copy_from_slice(&ws.backup_prev);
     }
 
     fn state_is_sane(&self) -> bool {

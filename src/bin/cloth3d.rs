@@ -57,6 +57,18 @@ struct RunArgs {
     /// Friction coefficient of the obstacles.
     #[arg(long, value_parser = parse_non_negative, allow_hyphen_values = true)]
     friction: Option<f32>,
+    /// Linearisations (Newton iterations) per substep (implicit-euler).
+    #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
+    newton_iterations: Option<u32>,
+    /// Maximum conjugate-gradient iterations per linearisation (implicit-euler).
+    #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
+    cg_iterations: Option<u32>,
+    /// Relative residual at which conjugate gradient stops (implicit-euler).
+    #[arg(long, value_parser = parse_positive, allow_hyphen_values = true)]
+    cg_tolerance: Option<f32>,
+    /// Local/global iterations per substep (fast-mass-spring).
+    #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
+    fms_iterations: Option<u32>,
     /// Print exactly one JSON object and nothing else on stdout.
     #[arg(long)]
     json: bool,
@@ -102,6 +114,14 @@ fn parse_n(s: &str) -> Result<usize, String> {
         Ok(n)
     } else {
         Err(format!("'{s}' must be between 2 and 4096"))
+    }
+}
+fn parse_iterations(s: &str) -> Result<u32, String> {
+    let f: u32 = parse_number(s, "a whole number")?;
+    if f >= 1 {
+        Ok(f)
+    } else {
+        Err("iterations must be at least 1".into())
     }
 }
 fn parse_frames(s: &str) -> Result<u32, String> {
@@ -200,6 +220,19 @@ fn run_command(args: RunArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    let params = &mut scene.cloth.params;
+    if let Some(it) = args.newton_iterations {
+        params.newton_iterations = it;
+    }
+    if let Some(it) = args.cg_iterations {
+        params.cg_max_iterations = it;
+    }
+    if let Some(tol) = args.cg_tolerance {
+        params.cg_tolerance = tol;
+    }
+    if let Some(it) = args.fms_iterations {
+        params.fms_iterations = it;
+    }
     let frames = scene.frames;
     match run(&mut scene, frames) {
         Ok(m) => {

@@ -126,7 +126,11 @@ pub struct SimulationParams {
     pub wind: Wind,
     /// Collision thickness: particles are kept this far outside obstacles, in metres.
     pub thickness: f32,
-    /// Maximum conjugate-gradient iterations of the implicit integrator.
+    /// Linearisations per substep of the implicit integrator (1 is Baraff and
+    /// Witkin's single linear solve; more are Newton iterations that keep
+    /// large steps of strongly bent cloth from overshooting).
+    pub newton_iterations: u32,
+    /// Maximum conjugate-gradient iterations of the implicit integrator, per linearisation.
     pub cg_max_iterations: u32,
     /// Relative residual at which conjugate gradient stops.
     pub cg_tolerance: f32,
@@ -146,6 +150,7 @@ impl Default for SimulationParams {
             air_drag: 0.02,
             wind: Wind::NONE,
             thickness: 0.01,
+            newton_iterations: 2,
             cg_max_iterations: 100,
             cg_tolerance: 1e-4,
             fms_iterations: 10,
@@ -169,6 +174,13 @@ impl SimulationParams {
         finite_vec("wind direction", self.wind.direction)?;
         non_negative("wind strength", self.wind.strength)?;
         non_negative("thickness", self.thickness)?;
+        if self.newton_iterations == 0 {
+            return Err(ClothError::InvalidParameter {
+                name: "newton iterations",
+                value: 0.0,
+                expected: "a whole number >= 1",
+            });
+        }
         if self.cg_max_iterations == 0 {
             return Err(ClothError::InvalidParameter {
                 name: "cg iterations",

@@ -15,6 +15,9 @@ const BVH_THRESHOLD: usize = 8;
 /// Where along a spring the edge test samples.
 const EDGE_SAMPLES: [f32; 3] = [0.25, 0.5, 0.75];
 
+/// Distance (m) beyond the thickness within which a particle still counts as touching.
+const CONTACT_SLACK: f32 = 1.0e-5;
+
 /// No obstacle near a particle.
 const NONE: u32 = u32::MAX;
 
@@ -37,6 +40,16 @@ pub(crate) struct Collider {
     reach: f32,
     /// Momentum handed to each obstacle during the current step.
     pub impulses: Vec<ObstacleImpulse>,
+    /// Per particle: in contact at the end of the last substep.
+    pub touching: Vec<bool>,
+    /// Per particle: the contact normal, when touching.
+    pub contact_normal: Vec<Vector>,
+    /// Per particle: the velocity of the surface it touches, when touching.
+    pub surface_velocity: Vec<Vector>,
+    /// Per particle: how far a solver's last projection pushed it out along
+    /// the normal during the current substep (m); counts towards the normal
+    /// impulse that bounds friction.
+    pushed: Vec<f32>,
 }
 
 impl Collider {
@@ -54,6 +67,13 @@ impl Collider {
             .resize(obstacles.len(), ObstacleImpulse::default());
         self.nearest.resize(particles, NONE);
         self.normal.resize(particles, Vector::ZERO);
+        self.touching.resize(particles, false);
+        self.pushed.resize(particles, 0.0);
+        self.contact_normal.resize(particles, Vector::ZERO);
+        self.surface_velocity.resize(particles, Vector::ZERO);
+        if obstacles.is_empty() {
+            self.touching.fill(false);
+        }
     }
 
     /// Obstacle candidates whose bounds contain `point`, into `self.candidates`.
@@ -72,15 +92,48 @@ impl Collider {
         }
     }
 
-    /// Resolves every contact after a substep of `h` seconds that ended `t`
-    /// seconds into the step.
+    /// Moves the obstacles to where they are `t` seconds into the step; call
+    /// before each substep.
+    pub fn set_time(&mut self, obstacles: &[Obstacle], t: f32) {
+        self.poses.clear();
+        self.poses.extend(obstacles.iter().map(|o| o.pose_at(t)));
+    }
+
+    /// Pushes free particles out to the thickness, positions only, and
+    /// remembers how far this last push went (for friction). Used inside
+    /// iterative solvers so that they converge to a state outside the obstacles.
+    pub fn project_positions(&mut self, x: &mut [Vector], inv_mass: &[f32], obstacles: &[Obstacle], thickness: f32) {
+        if obstacles.is_empty() {
+            return;
+        }
+        for i in 0..x.len() {
+            if inv_mass[i] == 0.0 {
+                continue;
+            }
+            self.gather(x[i]);
+            self.pushed[i] = 0.0;
+            for c in 0..self.candidates.len() {
+                let o = self.candidates[c] as usize;
+                let Some(contact) = contact(&*obstacles[o].shape, &self.poses[o], x[i]) else {
+                    continue;
+                };
+                if contact.signed_distance < thickness {
+                    let depth = thickness - contact.signed_distance;
+                    x[i] += contact.normal * depth;
+                    self.pushed[i] += depth;
+                }
+            }
+        }
+    }
+
+    /// Resolves every contact after a substep of `h` seconds, with the
+    /// obstacles where [`Collider::set_time`] put them.
     #[allow(clippy::too_many_arguments)]
     pub fn resolve(
         &mut self,
         particles: &mut Particles,
         springs: &Springs,
         obstacles: &[Obstacle],
-        t: f32,
         h: f32,
         thickness: f32,
         edges: bool,
@@ -88,11 +141,10 @@ impl Collider {
         if obstacles.is_empty() {
             return 0;
         }
-        self.poses.clear();
-        self.poses.extend(obstacles.iter().map(|o| o.pose_at(t)));
         let mut contacts = 0;
         for i in 0..particles.len() {
             self.nearest[i] = NONE;
+            self.touching[i] = false;
             self.gather(particles.x[i]);
             let mut nearest_distance = f32::INFINITY;
             for c in 0..self.candidates.len() {
@@ -106,7 +158,9 @@ impl Collider {
                     self.nearest[i] = o as u32;
                     self.normal[i] = contact.normal;
                 }
-                if particles.inv_mass[i] != 0.0 && contact.signed_distance < thickness {
+                // A hair of slack keeps particles a solver left exactly at the
+                // thickness in contact, so friction still acts on them.
+                if particles.inv_mass[i] != 0.0 && contact.signed_distance < thickness + CONTACT_SLACK {
                     self.resolve_particle(particles, i, &obstacles[o], o, contact, h, thickness);
                     contacts += 1;
                 }
@@ -145,13 +199,14 @@ impl Collider {
     ) {
         let pose = &self.poses[o];
         let n = c.normal;
-        let new_x = p.x[i] + n * (thickness - c.signed_distance);
+        let new_x = p.x[i] + n * (thickness - c.signed_distance).max(0.0);
         let surface_v = obstacle.velocity_at(pose, new_x);
         let v_old = p.v[i];
         let rel = v_old - surface_v;
         let vn = rel.dot(n);
-        // The normal velocity taken away bounds what friction may take away.
-        let removed = (-vn).max(0.0);
+        // The normal velocity taken away (here, or by a solver's projection)
+        // bounds what friction may take away.
+        let removed = (-vn).max(0.0) + std::mem::take(&mut self.pushed[i]) / h;
         let rel_t = rel - n * vn;
         let slip = rel_t.length();
         let limit = obstacle.friction * removed;
@@ -164,6 +219,9 @@ impl Collider {
         // Undo the slip friction forbade during this substep.
         p.x[i] = new_x + (rel_t_new - rel_t) * h;
         p.v[i] = v_new;
+        self.touching[i] = true;
+        self.contact_normal[i] = n;
+        self.surface_velocity[i] = surface_v;
         let j = (v_old - v_new) * p.mass[i];
         let imp = &mut self.impulses[o];
         imp.linear += j;

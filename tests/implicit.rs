@@ -1,0 +1,134 @@
+//! The implicit integrators: energy, equilibrium, and the cached Cholesky factor.
+
+mod common;
+
+use cloth3d::prelude::*;
+use common::oscillator;
+
+#[test]
+fn implicit_euler_never_adds_energy_to_an_undamped_system() {
+    for h in [1.0e-3f32, 0.01, 0.1, 0.5] {
+        let mut cloth = oscillator(0.2, 500.0, 0.0, 0.1, Integrator::ImplicitEuler);
+        let mut e = cloth.energy().total();
+        for _ in 0..200 {
+            cloth.step(h, &[]).unwrap();
+            let now = cloth.energy().total();
+            assert!(now <= e * (1.0 + 1e-6) + 1e-9, "h = {h}: energy rose from {e} to {now}");
+            e = now;
+        }
+    }
+    // A free, undamped cloth thrown and spinning, at game steps.
+    for h in [1.0f32 / 60.0, 0.1] {
+        let mut cloth = ClothBuilder::new(8, 8).build().unwrap();
+        cloth.params.gravity = Vector::ZERO;
+        cloth.params.air_drag = 0.0;
+        for kind in SpringKind::ALL {
+            cloth.material.params_mut(kind).damping = 0.0;
+        }
+        cloth.set_integrator(Integrator::ImplicitEuler);
+        cloth.params.substeps = Substeps::Fixed(1);
+        for i in 0..cloth.particle_count() {
+            let p = cloth.positions()[i];
+            cloth.set_velocity(i, Vector::new(-p.z, 0.3, p.x) * 2.0 + Vector::new(0.0, (i % 3) as f32, 0.0)).unwrap();
+        }
+        let e0 = cloth.energy().total();
+        for _ in 0..100 {
+            cloth.step(h, &[]).unwrap();
+        }
+        let e1 = cloth.energy().total();
+        assert!(e1 <= e0 * 1.0001, "h = {h}: energy rose from {e0} to {e1}");
+    }
+}
+
+/// A 10×10 cloth hanging from its top row, brought to rest by each integrator.
+fn hanging_equilibrium(integrator: Integrator, substeps: Substeps, frames: usize) -> Vec<Vector> {
+    let mut cloth = ClothBuilder::new(10, 10)
+        .size(0.5, 0.5)
+        .vertical(Vector::new(0.0, 1.0, 0.0))
+        .pins(PinPreset::CurtainRow)
+        .build()
+        .unwrap();
+    cloth.params.air_drag = 3.0;
+    cloth.params.cg_tolerance = 1e-6;
+    cloth.params.cg_max_iterations = 500;
+    cloth.params.fms_iterations = 30;
+    cloth.params.substeps = substeps;
+    cloth.set_integrator(integrator);
+    for _ in 0..frames {
+        cloth.step(1.0 / 60.0, &[]).unwrap();
+    }
+    assert!(cloth.energy().kinetic < 1e-8, "{integrator}: still moving");
+    cloth.positions().to_vec()
+}
+
+#[test]
+fn implicit_solvers_reach_the_same_equilibrium_as_small_step_symplectic_euler() {
+    let reference = hanging_equilibrium(Integrator::SymplecticEuler, Substeps::Auto, 900);
+    for integrator in [Integrator::ImplicitEuler, Integrator::FastMassSpring] {
+        let rest = hanging_equilibrium(integrator, Substeps::Fixed(1), 900);
+        let worst = reference
+            .iter()
+            .zip(&rest)
+            .map(|(a, b)| (*a - *b).length())
+            .fold(0.0, f32::max);
+        assert!(worst < 0.001, "{integrator}: {worst} m from the reference equilibrium");
+    }
+}
+
+#[test]
+fn the_cholesky_factor_is_reused_until_something_it_depends_on_changes() {
+    let mut cloth = ClothBuilder::new(12, 12).pins(PinPreset::TwoCorners).build().unwrap();
+    cloth.set_integrator(Integrator::FastMassSpring);
+    cloth.params.substeps = Substeps::Fixed(1);
+    assert_eq!(cloth.factorizations(), 0);
+    for _ in 0..10 {
+        cloth.step(1.0 / 60.0, &[]).unwrap();
+    }
+    assert_eq!(cloth.factorizations(), 1, "one factor for ten identical steps");
+    // Wind, gravity and drag are not in the matrix.
+    cloth.params.wind = Wind::new(Vector::X, 3.0);
+    cloth.step(1.0 / 60.0, &[]).unwrap();
+    assert_eq!(cloth.factorizations(), 1);
+    // A new pin, a new step, a new stiffness or damping each need a new factor.
+    cloth.pin(60).unwrap();
+    cloth.step(1.0 / 60.0, &[]).unwrap();
+    assert_eq!(cloth.factorizations(), 2);
+    cloth.step(1.0 / 30.0, &[]).unwrap();
+    assert_eq!(cloth.factorizations(), 3);
+    cloth.material.stretch.stiffness *= 2.0;
+    cloth.step(1.0 / 30.0, &[]).unwrap();
+    assert_eq!(cloth.factorizations(), 4);
+    cloth.material.shear.damping += 0.1;
+    cloth.step(1.0 / 30.0, &[]).unwrap();
+    cloth.step(1.0 / 30.0, &[]).unwrap();
+    assert_eq!(cloth.factorizations(), 5);
+}
+
+#[test]
+fn stiff_heavy_strongly_damped_cloth_is_stable_at_a_frame_step() {
+    // Leather, ten times heavier, damping raised a hundredfold: no clamp anywhere.
+    for integrator in [Integrator::ImplicitEuler, Integrator::FastMassSpring] {
+        let mut m = Material::leather();
+        for kind in SpringKind::ALL {
+            m.params_mut(kind).damping *= 100.0;
+        }
+        let mut cloth = ClothBuilder::new(24, 24)
+            .total_mass(10.0)
+            .material(m)
+            .pins(PinPreset::TwoCorners)
+            .integrator(integrator)
+            .build()
+            .unwrap();
+        cloth.params.substeps = Substeps::Fixed(1);
+        for _ in 0..120 {
+            cloth.step(1.0 / 60.0, &[]).unwrap();
+        }
+        assert!(cloth.is_finite());
+        // 10 kg on two corners: about 49 N through the few springs at each
+        // corner, k L ≈ 350 N, so several percent of stretch is the physics.
+        let stretch = cloth.max_strain(SpringKind::Stretch);
+        assert!(stretch > 0.01 && stretch < 0.15, "{integrator}: stretch {stretch}");
+        // It hangs below its pins rather than floating.
+        assert!(cloth.centroid().y < -0.1, "{integrator}: centroid {:?}", cloth.centroid());
+    }
+}
