@@ -22,6 +22,8 @@
 //! # Ok::<(), cloth3d::ClothError>(())
 //! ```
 #![warn(missing_docs)]
+// Numeric kernels index several structure-of-arrays buffers with one index.
+#![allow(clippy::needless_range_loop)]
 
 pub mod cloth;
 pub mod collision;
@@ -30,6 +32,7 @@ pub mod forces;
 pub mod integrators;
 pub mod metrics;
 pub mod pipeline;
+pub mod rapier;
 pub mod scenes;
 
 pub use cloth::{

@@ -65,6 +65,11 @@ pub struct RunMetrics {
     pub energy: f64,
     /// False if any position or velocity became NaN or infinite.
     pub finite: bool,
+    /// Fastest speed of the scene's rapier bodies on the final frame, in m/s
+    /// (`curtain`, `hammock`).
+    pub bodies_max_speed: Option<f32>,
+    /// Lowest centre height of the scene's rapier bodies on the final frame, in metres.
+    pub bodies_min_y: Option<f32>,
     /// Wall time spent stepping, in seconds.
     pub step_wall_s: f64,
     /// Particles × substeps simulated per second of stepping.
@@ -129,6 +134,20 @@ pub fn run_with(
         centroid: [c.x, c.y, c.z],
         energy: cloth.energy().total(),
         finite: cloth.is_finite(),
+        bodies_max_speed: scene.rapier.as_ref().map(|side| {
+            side.bodies
+                .iter()
+                .filter_map(|h| side.world.bodies.get(*h))
+                .map(|b| b.linvel().length())
+                .fold(0.0, f32::max)
+        }),
+        bodies_min_y: scene.rapier.as_ref().map(|side| {
+            side.bodies
+                .iter()
+                .filter_map(|h| side.world.bodies.get(*h))
+                .map(|b| b.translation().y)
+                .fold(f32::INFINITY, f32::min)
+        }),
         step_wall_s: wall,
         particle_substeps_per_s: if wall > 0.0 {
             cloth.particle_count() as f64 * substeps_total as f64 / wall

@@ -75,7 +75,7 @@ impl Cloth {
         };
         for s in 0..k {
             let t = (s + 1) as f32 * h;
-            self.workspace.collider.set_time(obstacles, t);
+            self.workspace.collider.set_time(obstacles, t, h);
             report.iterations += match integrators::substep(self, h, obstacles) {
                 Ok(it) => it,
                 Err(e) => {

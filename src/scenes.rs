@@ -3,12 +3,15 @@
 
 use serde::{Deserialize, Serialize};
 
+use rapier3d::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle};
+
 use crate::cloth::{Cloth, ClothBuilder, Material, PinPreset, Substeps, Wind};
-use crate::collision::Obstacle;
+use crate::collision::{penetration_depth, Obstacle};
 use crate::error::{positive, ClothError};
 use crate::integrators::Integrator;
 use crate::math::{Pose, Vector};
 use crate::pipeline::StepReport;
+use crate::rapier::RapierCoupling;
 
 /// The frame step of every scene, in seconds.
 pub const FRAME_DT: f32 = 1.0 / 60.0;
@@ -28,15 +31,21 @@ pub enum SceneKind {
     Flag,
     /// A 33×33 horizontal cloth hanging from a pin figure.
     Pins,
+    /// A 40×40 curtain on its rail pushed aside by a kinematic rapier ball.
+    Curtain,
+    /// A 32×32 hammock on its four corners catching three dynamic rapier boxes.
+    Hammock,
 }
 
 impl SceneKind {
     /// Every scene.
-    pub const ALL: [SceneKind; 4] = [
+    pub const ALL: [SceneKind; 6] = [
         SceneKind::Drape,
         SceneKind::Box,
         SceneKind::Flag,
         SceneKind::Pins,
+        SceneKind::Curtain,
+        SceneKind::Hammock,
     ];
 
     /// The scene's name.
@@ -46,6 +55,8 @@ impl SceneKind {
             SceneKind::Box => "box",
             SceneKind::Flag => "flag",
             SceneKind::Pins => "pins",
+            SceneKind::Curtain => "curtain",
+            SceneKind::Hammock => "hammock",
         }
     }
 
@@ -56,6 +67,8 @@ impl SceneKind {
             SceneKind::Box => "a tablecloth falls on a cube; nothing passes through its edges",
             SceneKind::Flag => "a flag pinned to its pole flaps in the wind",
             SceneKind::Pins => "a cloth hangs from a pinning figure (variants)",
+            SceneKind::Curtain => "a curtain is pushed aside by a moving kinematic rapier ball",
+            SceneKind::Hammock => "a hammock catches three dynamic rapier boxes (two-way coupling)",
         }
     }
 
@@ -88,7 +101,7 @@ impl SceneKind {
     /// Frames a run lasts by default (120, or 240 for `flag`).
     pub fn default_frames(self) -> u32 {
         match self {
-            SceneKind::Flag => 240,
+            SceneKind::Flag | SceneKind::Hammock => 240,
             _ => 120,
         }
     }
@@ -99,6 +112,8 @@ impl SceneKind {
             SceneKind::Drape | SceneKind::Box => (64, 64),
             SceneKind::Flag => (32, 20),
             SceneKind::Pins => (33, 33),
+            SceneKind::Curtain => (40, 40),
+            SceneKind::Hammock => (32, 32),
         }
     }
 }
@@ -131,8 +146,32 @@ pub struct SceneOptions {
     pub friction: Option<f32>,
 }
 
+/// The rapier side of a scene: the world, the coupling, and the bodies the scene drives.
+pub struct RapierSide {
+    /// The rapier world.
+    pub world: PhysicsWorld,
+    /// The cloth–world coupling.
+    pub coupling: RapierCoupling,
+    /// The scene's bodies (the curtain's ball, the hammock's boxes).
+    pub bodies: Vec<RigidBodyHandle>,
+}
+
+impl std::fmt::Debug for RapierSide {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RapierSide")
+            .field("bodies", &self.world.bodies.len())
+            .field("colliders", &self.world.colliders.len())
+            .finish()
+    }
+}
+
+/// Where the curtain's ball is (z, metres) `t` seconds into the scene.
+pub fn curtain_ball_z(t: f32) -> f32 {
+    (-1.0 + 2.0 * t).min(1.0)
+}
+
 /// A scene ready to run: its cloth, obstacles and frame step.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct Scene {
     /// Which scene.
     pub kind: SceneKind,
@@ -148,6 +187,8 @@ pub struct Scene {
     pub frames: u32,
     /// Frames stepped so far.
     pub frame: u32,
+    /// The rapier world of the scenes that have one (`curtain`, `hammock`).
+    pub rapier: Option<RapierSide>,
 }
 
 impl Scene {
@@ -223,7 +264,24 @@ impl Scene {
                     .horizontal(Vector::new(0.0, 0.6, 0.0))
                     .pins(variant.unwrap_or(PinPreset::Center));
             }
+            SceneKind::Curtain => {
+                builder = builder
+                    .size(1.0, 1.0)
+                    .vertical(Vector::new(0.0, 1.0, 0.0))
+                    .pins(PinPreset::CurtainRow);
+            }
+            SceneKind::Hammock => {
+                builder = builder
+                    .size(1.0, 1.0)
+                    .horizontal(Vector::new(0.0, 0.5, 0.0))
+                    .pins(PinPreset::FourCorners);
+            }
         }
+        let rapier = match kind {
+            SceneKind::Curtain => Some(curtain_world(dt, friction)),
+            SceneKind::Hammock => Some(hammock_world(dt, friction)),
+            _ => None,
+        };
         let mut cloth = builder.build()?;
         cloth.params.wind = wind;
         cloth.params.thickness = THICKNESS;
@@ -241,18 +299,123 @@ impl Scene {
             dt,
             frames: options.frames.unwrap_or(kind.default_frames()),
             frame: 0,
+            rapier,
         })
     }
 
-    /// Advances the scene by one frame.
+    /// Advances the scene by one frame: the cloth, then rapier (when the scene
+    /// has a world), see [`crate::rapier`] for why in that order.
     pub fn step_frame(&mut self) -> Result<StepReport, ClothError> {
-        let report = self.cloth.step(self.dt, &self.obstacles)?;
+        let report = match &mut self.rapier {
+            None => self.cloth.step(self.dt, &self.obstacles)?,
+            Some(side) => {
+                if self.kind == SceneKind::Curtain {
+                    let t = (self.frame + 1) as f32 * self.dt;
+                    if let Some(ball) = side
+                        .bodies
+                        .first()
+                        .and_then(|h| side.world.bodies.get_mut(*h))
+                    {
+                        ball.set_next_kinematic_translation(Vector::new(
+                            0.0,
+                            0.9,
+                            curtain_ball_z(t),
+                        ));
+                    }
+                }
+                let report = side
+                    .coupling
+                    .step_world(&mut self.cloth, &mut side.world)?
+                    .step;
+                side.world.step();
+                report
+            }
+        };
         self.frame += 1;
         Ok(report)
     }
 
+    /// The obstacles as they are now: the scene's own, or the rapier world's colliders.
+    pub fn current_obstacles(&self) -> Vec<Obstacle> {
+        match &self.rapier {
+            None => self.obstacles.clone(),
+            Some(side) => side
+                .world
+                .colliders
+                .iter()
+                .map(|(_, c)| Obstacle::new(c.shared_shape().clone(), *c.position()))
+                .collect(),
+        }
+    }
+
     /// The deepest any particle lies inside any obstacle's surface, in metres.
     pub fn max_penetration(&self) -> f32 {
-        crate::metrics::max_penetration(&self.cloth, &self.obstacles)
+        match &self.rapier {
+            None => crate::metrics::max_penetration(&self.cloth, &self.obstacles),
+            Some(side) => {
+                let mut deepest = 0.0f32;
+                for (_, c) in side.world.colliders.iter() {
+                    let aabb = c.compute_aabb();
+                    for &p in self.cloth.positions() {
+                        if aabb.contains_local_point(p) {
+                            deepest = deepest.max(penetration_depth(c.shape(), c.position(), p));
+                        }
+                    }
+                }
+                deepest
+            }
+        }
+    }
+}
+
+/// The curtain's world: a kinematic ball of radius 0.2 at (0, 0.9, -1).
+fn curtain_world(dt: f32, friction: f32) -> RapierSide {
+    let mut world = PhysicsWorld::new();
+    world.integration_parameters.dt = dt;
+    let (ball, _) = world.insert(
+        RigidBodyBuilder::kinematic_position_based().translation(Vector::new(
+            0.0,
+            0.9,
+            curtain_ball_z(0.0),
+        )),
+        ColliderBuilder::ball(0.2),
+    );
+    let mut coupling = RapierCoupling::new();
+    coupling.friction = friction;
+    RapierSide {
+        world,
+        coupling,
+        bodies: vec![ball],
+    }
+}
+
+/// The hammock's world: three 0.5 kg boxes of half-extent 0.1 dropped from
+/// y = 1 at x = -0.25, 0, 0.25, and a fixed ground with its top at y = 0.
+fn hammock_world(dt: f32, friction: f32) -> RapierSide {
+    let mut world = PhysicsWorld::new();
+    world.integration_parameters.dt = dt;
+    world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(0.0, -0.5, 0.0)),
+        ColliderBuilder::cuboid(3.0, 0.5, 3.0),
+    );
+    let half = 0.1f32;
+    let density = 0.5 / (8.0 * half * half * half);
+    let bodies = [-0.25f32, 0.0, 0.25]
+        .iter()
+        .map(|&x| {
+            world
+                .insert(
+                    RigidBodyBuilder::dynamic().translation(Vector::new(x, 1.0, 0.0)),
+                    ColliderBuilder::cuboid(half, half, half).density(density),
+                )
+                .0
+        })
+        .collect();
+    let mut coupling = RapierCoupling::new();
+    coupling.friction = friction;
+    RapierSide {
+        world,
+        coupling,
+        bodies,
     }
 }

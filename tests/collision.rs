@@ -29,7 +29,7 @@ impl Rng {
         let axis = self.vector(1.0).normalize_or(Vector::X);
         Pose::from_parts(
             self.vector(3.0),
-            Rotation::from_axis_angle(axis, self.range(0.0, 6.28)),
+            Rotation::from_axis_angle(axis, self.range(0.0, std::f32::consts::TAU)),
         )
     }
 }
@@ -62,8 +62,7 @@ fn assert_close(a: Vector, b: Vector, tol: f32, what: &str) {
 #[test]
 fn ball_contact_matches_the_analytic_projection() {
     let mut rng = Rng(0x9e3779b97f4a7c15);
-    let mut checked = 0;
-    for _ in 0..4000 {
+    for checked in 0..4000 {
         let r = rng.range(0.05, 1.0);
         let pose = rng.pose();
         let c = pose.translation;
@@ -86,7 +85,6 @@ fn ball_contact_matches_the_analytic_projection() {
         // The same surface point as parry's own projection.
         let parry = Ball::new(r).project_point(&pose, p, false);
         assert_close(got.point, parry.point, 1e-5, "parry's ball projection");
-        checked += 1;
     }
     // The degenerate centre: a finite answer that pushes out along +y.
     let pose = Pose::from_translation(Vector::new(1.0, 2.0, 3.0));

@@ -13,7 +13,10 @@ fn implicit_euler_never_adds_energy_to_an_undamped_system() {
         for _ in 0..200 {
             cloth.step(h, &[]).unwrap();
             let now = cloth.energy().total();
-            assert!(now <= e * (1.0 + 1e-6) + 1e-9, "h = {h}: energy rose from {e} to {now}");
+            assert!(
+                now <= e * (1.0 + 1e-6) + 1e-9,
+                "h = {h}: energy rose from {e} to {now}"
+            );
             e = now;
         }
     }
@@ -29,7 +32,12 @@ fn implicit_euler_never_adds_energy_to_an_undamped_system() {
         cloth.params.substeps = Substeps::Fixed(1);
         for i in 0..cloth.particle_count() {
             let p = cloth.positions()[i];
-            cloth.set_velocity(i, Vector::new(-p.z, 0.3, p.x) * 2.0 + Vector::new(0.0, (i % 3) as f32, 0.0)).unwrap();
+            cloth
+                .set_velocity(
+                    i,
+                    Vector::new(-p.z, 0.3, p.x) * 2.0 + Vector::new(0.0, (i % 3) as f32, 0.0),
+                )
+                .unwrap();
         }
         let e0 = cloth.energy().total();
         for _ in 0..100 {
@@ -71,20 +79,30 @@ fn implicit_solvers_reach_the_same_equilibrium_as_small_step_symplectic_euler() 
             .zip(&rest)
             .map(|(a, b)| (*a - *b).length())
             .fold(0.0, f32::max);
-        assert!(worst < 0.001, "{integrator}: {worst} m from the reference equilibrium");
+        assert!(
+            worst < 0.001,
+            "{integrator}: {worst} m from the reference equilibrium"
+        );
     }
 }
 
 #[test]
 fn the_cholesky_factor_is_reused_until_something_it_depends_on_changes() {
-    let mut cloth = ClothBuilder::new(12, 12).pins(PinPreset::TwoCorners).build().unwrap();
+    let mut cloth = ClothBuilder::new(12, 12)
+        .pins(PinPreset::TwoCorners)
+        .build()
+        .unwrap();
     cloth.set_integrator(Integrator::FastMassSpring);
     cloth.params.substeps = Substeps::Fixed(1);
     assert_eq!(cloth.factorizations(), 0);
     for _ in 0..10 {
         cloth.step(1.0 / 60.0, &[]).unwrap();
     }
-    assert_eq!(cloth.factorizations(), 1, "one factor for ten identical steps");
+    assert_eq!(
+        cloth.factorizations(),
+        1,
+        "one factor for ten identical steps"
+    );
     // Wind, gravity and drag are not in the matrix.
     cloth.params.wind = Wind::new(Vector::X, 3.0);
     cloth.step(1.0 / 60.0, &[]).unwrap();
@@ -127,8 +145,15 @@ fn stiff_heavy_strongly_damped_cloth_is_stable_at_a_frame_step() {
         // 10 kg on two corners: about 49 N through the few springs at each
         // corner, k L ≈ 350 N, so several percent of stretch is the physics.
         let stretch = cloth.max_strain(SpringKind::Stretch);
-        assert!(stretch > 0.01 && stretch < 0.15, "{integrator}: stretch {stretch}");
+        assert!(
+            stretch > 0.01 && stretch < 0.15,
+            "{integrator}: stretch {stretch}"
+        );
         // It hangs below its pins rather than floating.
-        assert!(cloth.centroid().y < -0.1, "{integrator}: centroid {:?}", cloth.centroid());
+        assert!(
+            cloth.centroid().y < -0.1,
+            "{integrator}: centroid {:?}",
+            cloth.centroid()
+        );
     }
 }

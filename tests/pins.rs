@@ -108,9 +108,7 @@ fn cloth_pinned_along_its_top_row_comes_to_rest_with_bounded_stretch() {
     assert!(e.kinetic < 1e-4, "still moving: {} J kinetic", e.kinetic);
     let stretch = cloth.max_strain(SpringKind::Stretch);
     assert!(stretch > 0.0 && stretch < 0.05, "max stretch {stretch}");
-    for c in 0..16 {
-        assert_eq!(cloth.positions()[c], top[c]);
-    }
+    assert_eq!(&cloth.positions()[..16], &top[..]);
     // It hangs straight down from the rail.
     let bottom = cloth.positions()[15 * 16 + 8];
     assert!(

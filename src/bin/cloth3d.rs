@@ -159,6 +159,31 @@ fn main() -> ExitCode {
     }
 }
 
+/// `writeln!` into a `String` (which cannot fail).
+macro_rules! outln {
+    ($out:expr) => {
+        $out.push('\n')
+    };
+    ($out:expr, $($arg:tt)*) => {{
+        use std::fmt::Write as _;
+        let _ = writeln!($out, $($arg)*);
+    }};
+}
+
+/// `write!` into a `String` (which cannot fail).
+macro_rules! outp {
+    ($out:expr, $($arg:tt)*) => {{
+        use std::fmt::Write as _;
+        let _ = write!($out, $($arg)*);
+    }};
+}
+
+/// Writes to stdout; a closed pipe (`cloth3d list | head`) is not an error.
+fn emit(text: &str) {
+    use std::io::Write as _;
+    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
 /// The first paragraph of a clap error, on one line.
 fn one_line(message: &str) -> String {
     message
@@ -170,36 +195,44 @@ fn one_line(message: &str) -> String {
 }
 
 fn list() {
-    println!("scenes:");
+    let mut out = String::new();
+    outln!(out, "scenes:");
     for s in SceneKind::ALL {
         let variants = s.variants().iter().map(|v| v.name()).collect::<Vec<_>>();
         let (c, r) = s.default_grid();
-        print!(
+        outp!(
+            out,
             "  {:<8} {c}×{r}, {} frames: {}",
             s.name(),
             s.default_frames(),
             s.description()
         );
         if !variants.is_empty() {
-            print!(" [variants: {}]", variants.join(", "));
+            outp!(out, " [variants: {}]", variants.join(", "));
         }
-        println!();
+        outln!(out);
     }
-    println!("integrators:");
+    outln!(out, "integrators:");
     for i in Integrator::ALL {
-        println!("  {}", i.name());
+        outln!(out, "  {}", i.name());
     }
-    println!("materials:");
+    outln!(out, "materials:");
     for m in Material::presets() {
-        println!(
+        outln!(
+            out,
             "  {:<8} stretch {} N/m, shear {} N/m, bend {} N/m, {} kg/m²",
-            m.name, m.stretch.stiffness, m.shear.stiffness, m.bend.stiffness, m.density
+            m.name,
+            m.stretch.stiffness,
+            m.shear.stiffness,
+            m.bend.stiffness,
+            m.density
         );
     }
-    println!("pin presets:");
+    outln!(out, "pin presets:");
     for p in PinPreset::ALL {
-        println!("  {}", p.name());
+        outln!(out, "  {}", p.name());
     }
+    emit(&out);
 }
 
 fn run_command(args: RunArgs) -> ExitCode {
@@ -238,7 +271,7 @@ fn run_command(args: RunArgs) -> ExitCode {
         Ok(m) => {
             if args.json {
                 match serde_json::to_string(&m) {
-                    Ok(s) => println!("{s}"),
+                    Ok(s) => emit(&format!("{s}\n")),
                     Err(e) => {
                         eprintln!("error: {e}");
                         return ExitCode::from(1);
@@ -257,47 +290,63 @@ fn run_command(args: RunArgs) -> ExitCode {
 }
 
 fn print_table(m: &RunMetrics) {
+    let mut out = String::new();
     let variant = m
         .variant
         .as_deref()
         .map(|v| format!(" ({v})"))
         .unwrap_or_default();
-    println!("scene                      {}{variant}", m.scene);
-    println!("grid                       {}×{}", m.grid[0], m.grid[1]);
-    println!("integrator                 {}", m.integrator);
-    println!("material                   {}", m.material);
-    println!(
-        "dt                         {} s × {} frames",
-        m.dt, m.frames
+    outln!(out, "scene                      {}{variant}", m.scene);
+    outln!(
+        out,
+        "grid                       {}×{}",
+        m.grid[0],
+        m.grid[1]
     );
-    println!("substeps                   {}", m.substeps);
+    outln!(out, "integrator                 {}", m.integrator);
+    outln!(out, "material                   {}", m.material);
+    outln!(
+        out,
+        "dt                         {} s × {} frames",
+        m.dt,
+        m.frames
+    );
+    outln!(out, "substeps                   {}", m.substeps);
     if let Some(it) = m.iterations {
-        println!("iterations per frame       {it}");
+        outln!(out, "iterations per frame       {it}");
     }
-    println!("max_penetration            {:.6} m", m.max_penetration);
-    println!(
+    outln!(out, "max_penetration            {:.6} m", m.max_penetration);
+    outln!(
+        out,
         "max_penetration_any_frame  {:.6} m",
         m.max_penetration_any_frame
     );
-    println!(
+    outln!(
+        out,
         "max_stretch                {:.4} ({:.2}%)",
         m.max_stretch,
         100.0 * m.max_stretch
     );
-    println!("min_y                      {:.4} m", m.min_y);
-    println!(
+    outln!(out, "min_y                      {:.4} m", m.min_y);
+    outln!(
+        out,
         "centroid                   ({:.4}, {:.4}, {:.4}) m",
-        m.centroid[0], m.centroid[1], m.centroid[2]
+        m.centroid[0],
+        m.centroid[1],
+        m.centroid[2]
     );
-    println!("energy                     {:.4} J", m.energy);
-    println!("finite                     {}", m.finite);
-    println!(
+    outln!(out, "energy                     {:.4} J", m.energy);
+    outln!(out, "finite                     {}", m.finite);
+    outln!(
+        out,
         "step_wall_s                {:.4} s ({:.3} ms/frame)",
         m.step_wall_s,
         1000.0 * m.step_wall_s / m.frames.max(1) as f64
     );
-    println!(
+    outln!(
+        out,
         "particle_substeps_per_s    {:.3e}",
         m.particle_substeps_per_s
     );
+    emit(&out);
 }

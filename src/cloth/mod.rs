@@ -18,7 +18,8 @@ use crate::math::Vector;
 
 /// The particles of a cloth, as structure-of-arrays.
 ///
-/// A particle with inverse mass 0 is pinned: no force moves it.
+/// A particle with inverse mass 0 is pinned: no force moves it; it moves only
+/// with the velocity it is given (a kinematic pin) or when it is set on purpose.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Particles {
     /// Positions, in metres.
@@ -439,17 +440,21 @@ impl Cloth {
     /// Pins particle `i` where it is: it stops and no force moves it any more.
     pub fn pin(&mut self, i: usize) -> Result<(), ClothError> {
         self.check_index(i)?;
-        self.particles.inv_mass[i] = 0.0;
         self.particles.v[i] = Vector::ZERO;
-        self.workspace.invalidate();
+        if self.particles.inv_mass[i] != 0.0 {
+            self.particles.inv_mass[i] = 0.0;
+            self.workspace.invalidate();
+        }
         Ok(())
     }
 
     /// Releases particle `i`; it gets its mass back.
     pub fn unpin(&mut self, i: usize) -> Result<(), ClothError> {
         self.check_index(i)?;
-        self.particles.inv_mass[i] = 1.0 / self.particles.mass[i];
-        self.workspace.invalidate();
+        if self.particles.inv_mass[i] == 0.0 {
+            self.particles.inv_mass[i] = 1.0 / self.particles.mass[i];
+            self.workspace.invalidate();
+        }
         Ok(())
     }
 
@@ -493,7 +498,8 @@ impl Cloth {
         Ok(())
     }
 
-    /// Sets the velocity of particle `i` in m/s (ignored by the solver while it is pinned).
+    /// Sets the velocity of particle `i` in m/s. A pinned particle keeps this
+    /// velocity through the steps: it moves kinematically, dragging the cloth.
     pub fn set_velocity(&mut self, i: usize, velocity: Vector) -> Result<(), ClothError> {
         self.check_index(i)?;
         finite_vec("velocity", velocity)?;

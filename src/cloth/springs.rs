@@ -135,11 +135,11 @@ impl Springs {
     }
 }
 
+/// A spring of the grid topology: its two particles and its kind.
+pub(crate) type GridSpring = (usize, usize, SpringKind);
+
 /// Springs and triangles of a `cols × rows` grid, particle `(r, c)` at index `r * cols + c`.
-pub(crate) fn grid_topology(
-    cols: usize,
-    rows: usize,
-) -> (Vec<(usize, usize, SpringKind)>, Vec<[u32; 3]>) {
+pub(crate) fn grid_topology(cols: usize, rows: usize) -> (Vec<GridSpring>, Vec<[u32; 3]>) {
     let id = |r: usize, c: usize| r * cols + c;
     let mut springs = Vec::new();
     for r in 0..rows {

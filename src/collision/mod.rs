@@ -12,5 +12,5 @@ mod obstacle;
 mod resolve;
 
 pub use contact::{contact, penetration_depth, Contact};
-pub use obstacle::{Obstacle, ObstacleImpulse};
+pub use obstacle::{DynamicBody, Obstacle, ObstacleImpulse};
 pub(crate) use resolve::Collider;

@@ -1,9 +1,11 @@
 //! Obstacles: a parry shape with a pose, a velocity and a friction coefficient.
 
-use parry3d::bounding_volume::Aabb;
+use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::shape::SharedShape;
 
 use crate::error::ClothError;
+use glam::Mat3;
+
 use crate::math::{Pose, Rotation, Vector};
 
 /// A shape the cloth collides with.
@@ -26,6 +28,23 @@ pub struct Obstacle {
     pub angvel: Vector,
     /// Coulomb friction coefficient between cloth and this obstacle.
     pub friction: f32,
+    /// For a body that the cloth's push moves (a dynamic rapier body): its
+    /// mass properties. Its velocity then responds to the cloth's impulses
+    /// substep by substep, and solvers do not treat it as immovable.
+    pub body: Option<DynamicBody>,
+}
+
+/// Mass properties of a dynamic obstacle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DynamicBody {
+    /// Inverse mass along each world axis, in 1/kg (0 on a locked axis).
+    pub inverse_mass: Vector,
+    /// World-space inverse inertia tensor about the centre of mass, in 1/(kg·m²).
+    pub inverse_inertia: Mat3,
+    /// Centre of mass at the start of the step, world coordinates (m).
+    pub center_of_mass: Vector,
+    /// Constant acceleration during the step (its gravity), in m/s².
+    pub acceleration: Vector,
 }
 
 impl std::fmt::Debug for Obstacle {
@@ -36,6 +55,7 @@ impl std::fmt::Debug for Obstacle {
             .field("linvel", &self.linvel)
             .field("angvel", &self.angvel)
             .field("friction", &self.friction)
+            .field("body", &self.body)
             .finish()
     }
 }
@@ -67,6 +87,7 @@ impl Obstacle {
             linvel: Vector::ZERO,
             angvel: Vector::ZERO,
             friction: 0.5,
+            body: None,
         }
     }
 
@@ -113,7 +134,12 @@ impl Obstacle {
 
     /// World bounding box of the obstacle over `[0, dt]` of the step.
     pub fn swept_aabb(&self, dt: f32) -> Aabb {
-        self.shape.compute_swept_aabb(&self.pose, &self.pose_at(dt))
+        let swept = self.shape.compute_swept_aabb(&self.pose, &self.pose_at(dt));
+        match &self.body {
+            // A dynamic body also falls, and is slowed by the cloth.
+            Some(b) => swept.loosened(0.5 * b.acceleration.length() * dt * dt),
+            None => swept,
+        }
     }
 
     /// Checks that the pose, velocities and friction are finite (friction >= 0).
@@ -130,6 +156,17 @@ impl Obstacle {
         }
         if !(self.friction.is_finite() && self.friction >= 0.0) {
             return Err(bad("its friction must be a finite number >= 0"));
+        }
+        if let Some(b) = &self.body {
+            let finite = b.inverse_mass.is_finite()
+                && b.inverse_inertia.is_finite()
+                && b.center_of_mass.is_finite()
+                && b.acceleration.is_finite();
+            if !finite || b.inverse_mass.min_element() < 0.0 {
+                return Err(bad(
+                    "its body's mass properties must be finite, inverse mass >= 0",
+                ));
+            }
         }
         let aabb = self.shape.compute_local_aabb();
         if !(aabb.mins.is_finite() && aabb.maxs.is_finite()) {

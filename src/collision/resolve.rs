@@ -3,10 +3,12 @@
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 
+use parry3d::query::Ray;
+
 use super::contact::contact;
-use super::{Obstacle, ObstacleImpulse};
+use super::{Contact, Obstacle, ObstacleImpulse};
 use crate::cloth::{Particles, SpringKind, Springs};
-use crate::math::{Pose, Vector};
+use crate::math::{Pose, Rotation, Vector};
 
 /// Above this many obstacles, candidates come from a bounding-volume tree
 /// instead of a linear scan.
@@ -31,6 +33,13 @@ const SMOOTH_COS: f32 = 0.995;
 pub(crate) struct Collider {
     aabbs: Vec<Aabb>,
     poses: Vec<Pose>,
+    prev_poses: Vec<Pose>,
+    /// Per dynamic obstacle: centre of mass, its velocity, the angular
+    /// velocity, and the impulses already turned into velocity.
+    com: Vec<Vector>,
+    com_velocity: Vec<Vector>,
+    angvel: Vec<Vector>,
+    applied: Vec<ObstacleImpulse>,
     bvh: Option<Bvh>,
     candidates: Vec<u32>,
     /// Per particle: the obstacle nearest to it this substep (`u32::MAX` for none)
@@ -46,6 +55,10 @@ pub(crate) struct Collider {
     pub contact_normal: Vec<Vector>,
     /// Per particle: the velocity of the surface it touches, when touching.
     pub surface_velocity: Vec<Vector>,
+    /// Per particle: the obstacle it touches, when touching.
+    pub contact_obstacle: Vec<u32>,
+    /// Per particle: the obstacle it touches is fixed or kinematic (not pushed back).
+    pub contact_immovable: Vec<bool>,
     /// Per particle: how far a solver's last projection pushed it out along
     /// the normal during the current substep (m); counts towards the normal
     /// impulse that bounds friction.
@@ -65,9 +78,32 @@ impl Collider {
         self.impulses.clear();
         self.impulses
             .resize(obstacles.len(), ObstacleImpulse::default());
+        self.applied.clear();
+        self.applied
+            .resize(obstacles.len(), ObstacleImpulse::default());
+        self.poses.clear();
+        self.poses.extend(obstacles.iter().map(|o| o.pose));
+        self.com.clear();
+        self.com_velocity.clear();
+        self.angvel.clear();
+        for o in obstacles {
+            let com = o.body.map_or(o.pose.translation, |b| b.center_of_mass);
+            self.com.push(com);
+            self.com_velocity
+                .push(o.linvel + o.angvel.cross(com - o.pose.translation));
+            self.angvel.push(o.angvel);
+        }
         self.nearest.resize(particles, NONE);
         self.normal.resize(particles, Vector::ZERO);
         self.touching.resize(particles, false);
+        self.contact_obstacle.resize(particles, NONE);
+        self.contact_immovable.resize(particles, false);
+        // Contacts carried over from the last step must name an obstacle of this one.
+        for i in 0..particles {
+            if self.touching[i] && self.contact_obstacle[i] as usize >= obstacles.len() {
+                self.touching[i] = false;
+            }
+        }
         self.pushed.resize(particles, 0.0);
         self.contact_normal.resize(particles, Vector::ZERO);
         self.surface_velocity.resize(particles, Vector::ZERO);
@@ -92,17 +128,104 @@ impl Collider {
         }
     }
 
+    /// Records momentum `j` (N·s) handed to obstacle `o` at `point` by a solver.
+    pub fn add_impulse(&mut self, o: usize, point: Vector, j: Vector) {
+        if let Some(imp) = self.impulses.get_mut(o) {
+            imp.linear += j;
+            imp.angular_about_origin += point.cross(j);
+        }
+    }
+
     /// Moves the obstacles to where they are `t` seconds into the step; call
     /// before each substep.
-    pub fn set_time(&mut self, obstacles: &[Obstacle], t: f32) {
-        self.poses.clear();
-        self.poses.extend(obstacles.iter().map(|o| o.pose_at(t)));
+    pub fn set_time(&mut self, obstacles: &[Obstacle], t: f32, h: f32) {
+        self.prev_poses.clear();
+        self.prev_poses.extend_from_slice(&self.poses);
+        for (o, obstacle) in obstacles.iter().enumerate() {
+            let Some(body) = &obstacle.body else {
+                self.poses[o] = obstacle.pose_at(t);
+                continue;
+            };
+            // A dynamic body: the cloth's push since the last substep changes
+            // its velocity, then it moves on by one substep.
+            let done = self.applied[o];
+            let now = self.impulses[o];
+            let dj = now.linear - done.linear;
+            let dtau =
+                (now.angular_about_origin - done.angular_about_origin) - self.com[o].cross(dj);
+            self.applied[o] = now;
+            self.com_velocity[o] += dj * body.inverse_mass + body.acceleration * h;
+            self.angvel[o] += body.inverse_inertia * dtau;
+            let spin = Rotation::from_scaled_axis(self.angvel[o] * h);
+            let pose = &mut self.poses[o];
+            let arm = pose.translation - self.com[o];
+            self.com[o] += self.com_velocity[o] * h;
+            pose.translation = self.com[o] + spin * arm;
+            pose.rotation = (spin * pose.rotation).normalize();
+        }
+    }
+
+    /// Velocity of the material point of obstacle `o` at `point`, now.
+    fn surface_velocity_of(&self, obstacles: &[Obstacle], o: usize, point: Vector) -> Vector {
+        match obstacles[o].body {
+            Some(_) => self.com_velocity[o] + self.angvel[o].cross(point - self.com[o]),
+            None => obstacles[o].velocity_at(&self.poses[o], point),
+        }
+    }
+
+    /// The contact of particle `i` with obstacle `o`. A particle that ended the
+    /// substep inside but started it outside (relative to the moving
+    /// obstacle) is traced along its relative path, so it is pushed back out
+    /// through the face it entered rather than through the nearest one: fast
+    /// obstacles do not pass through the cloth.
+    fn particle_contact(
+        &self,
+        p: &Particles,
+        i: usize,
+        obstacle: &Obstacle,
+        o: usize,
+    ) -> Option<Contact> {
+        let pose = &self.poses[o];
+        let c = contact(&*obstacle.shape, pose, p.x[i])?;
+        if c.signed_distance >= 0.0 {
+            return Some(c);
+        }
+        let prev = &self.prev_poses[o];
+        let from = prev.inverse_transform_point(p.x_prev[i]);
+        if obstacle.shape.contains_local_point(from) {
+            return Some(c);
+        }
+        let to = pose.inverse_transform_point(p.x[i]);
+        let ray = Ray::new(from, to - from);
+        match obstacle
+            .shape
+            .cast_local_ray_and_get_normal(&ray, 1.0, true)
+        {
+            Some(hit) if hit.normal.is_finite() && hit.normal.length_squared() > 0.5 => {
+                let entry = ray.point_at(hit.time_of_impact);
+                let n = hit.normal.normalize();
+                // Depth below the entry face, along its normal.
+                let depth = (to - entry).dot(n).min(0.0);
+                Some(Contact {
+                    point: pose.transform_point(to - n * depth),
+                    normal: pose.transform_vector(n),
+                    signed_distance: depth,
+                })
+            }
+            _ => Some(c),
+        }
     }
 
     /// Pushes free particles out to the thickness, positions only, and
     /// remembers how far this last push went (for friction). Used inside
     /// iterative solvers so that they converge to a state outside the obstacles.
-    pub fn project_positions(&mut self, x: &mut [Vector], inv_mass: &[f32], obstacles: &[Obstacle], thickness: f32) {
+    pub fn project_positions(
+        &mut self,
+        x: &mut [Vector],
+        inv_mass: &[f32],
+        obstacles: &[Obstacle],
+        thickness: f32,
+    ) {
         if obstacles.is_empty() {
             return;
         }
@@ -149,8 +272,7 @@ impl Collider {
             let mut nearest_distance = f32::INFINITY;
             for c in 0..self.candidates.len() {
                 let o = self.candidates[c] as usize;
-                let Some(contact) = contact(&*obstacles[o].shape, &self.poses[o], particles.x[i])
-                else {
+                let Some(contact) = self.particle_contact(particles, i, &obstacles[o], o) else {
                     continue;
                 };
                 if contact.signed_distance < nearest_distance {
@@ -160,8 +282,10 @@ impl Collider {
                 }
                 // A hair of slack keeps particles a solver left exactly at the
                 // thickness in contact, so friction still acts on them.
-                if particles.inv_mass[i] != 0.0 && contact.signed_distance < thickness + CONTACT_SLACK {
-                    self.resolve_particle(particles, i, &obstacles[o], o, contact, h, thickness);
+                if particles.inv_mass[i] != 0.0
+                    && contact.signed_distance < thickness + CONTACT_SLACK
+                {
+                    self.resolve_particle(particles, i, obstacles, o, contact, h, thickness);
                     contacts += 1;
                 }
             }
@@ -191,16 +315,16 @@ impl Collider {
         &mut self,
         p: &mut Particles,
         i: usize,
-        obstacle: &Obstacle,
+        obstacles: &[Obstacle],
         o: usize,
-        c: super::Contact,
+        c: Contact,
         h: f32,
         thickness: f32,
     ) {
-        let pose = &self.poses[o];
+        let obstacle = &obstacles[o];
         let n = c.normal;
         let new_x = p.x[i] + n * (thickness - c.signed_distance).max(0.0);
-        let surface_v = obstacle.velocity_at(pose, new_x);
+        let surface_v = self.surface_velocity_of(obstacles, o, new_x);
         let v_old = p.v[i];
         let rel = v_old - surface_v;
         let vn = rel.dot(n);
@@ -220,6 +344,8 @@ impl Collider {
         p.x[i] = new_x + (rel_t_new - rel_t) * h;
         p.v[i] = v_new;
         self.touching[i] = true;
+        self.contact_obstacle[i] = o as u32;
+        self.contact_immovable[i] = obstacle.body.is_none();
         self.contact_normal[i] = n;
         self.surface_velocity[i] = surface_v;
         let j = (v_old - v_new) * p.mass[i];
@@ -267,7 +393,7 @@ impl Collider {
                         continue;
                     }
                     p.x[i] += push * w;
-                    let surface_v = obstacle.velocity_at(pose, p.x[i]);
+                    let surface_v = self.surface_velocity_of(obstacles, o, p.x[i]);
                     let vn = (p.v[i] - surface_v).dot(n);
                     if vn < 0.0 {
                         let dv = -n * vn;

@@ -115,7 +115,8 @@ fn build_factor(model: &ForceModel, h: f32, n: usize) -> Result<Factor, ClothErr
         }
     }
     let csc = CscMatrix::from(&coo);
-    let chol = CscCholesky::factor(&csc).map_err(|e| ClothError::Solver(format!("Cholesky factorisation failed: {e:?}")))?;
+    let chol = CscCholesky::factor(&csc)
+        .map_err(|e| ClothError::Solver(format!("Cholesky factorisation failed: {e:?}")))?;
     let (col_offsets, row_indices, values) = chol.take_l().disassemble();
     Ok(Factor {
         key: key(model, h, n),
@@ -217,6 +218,10 @@ pub(crate) fn step(
     let h2 = h as f64 * h as f64;
     for i in 0..n {
         x_n[i] = x[i];
+        if model.inv_mass[i] == 0.0 {
+            // A moving pin is where its velocity takes it by the end of the substep.
+            x[i] += v[i] * h;
+        }
         y[i] = x[i] + v[i] * h + f_ext[i] * (model.inv_mass[i] * h * h);
     }
     // The part of the right-hand side that does not change between iterations:
@@ -280,9 +285,12 @@ pub(crate) fn step(
         for (r, &i) in factor.particle.iter().enumerate() {
             x[i as usize] = Vector::new(rhs[r][0] as f32, rhs[r][1] as f32, rhs[r][2] as f32);
         }
-        contacts
-            .collider
-            .project_positions(x, model.inv_mass, contacts.obstacles, contacts.thickness);
+        contacts.collider.project_positions(
+            x,
+            model.inv_mass,
+            contacts.obstacles,
+            contacts.thickness,
+        );
     }
     let inv_h = 1.0 / h;
     for &i in &factor.particle {

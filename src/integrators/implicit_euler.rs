@@ -49,6 +49,8 @@ pub(crate) struct ImplicitState {
     diag: Vec<Mat3>,
     precond: Vec<Mat3>,
     filter: Vec<Filter>,
+    /// All `Free`: for products that must not be filtered.
+    unfiltered: Vec<Filter>,
     f: Vec<Vector>,
     b: Vec<Vector>,
     dv: Vec<Vector>,
@@ -69,7 +71,16 @@ impl ImplicitState {
             buf.resize(n, Mat3::ZERO);
         }
         self.filter.resize(n, Filter::Free);
-        for buf in [&mut self.f, &mut self.b, &mut self.dv, &mut self.r, &mut self.c, &mut self.q, &mut self.s] {
+        self.unfiltered.resize(n, Filter::Free);
+        for buf in [
+            &mut self.f,
+            &mut self.b,
+            &mut self.dv,
+            &mut self.r,
+            &mut self.c,
+            &mut self.q,
+            &mut self.s,
+        ] {
             buf.resize(n, Vector::ZERO);
         }
     }
@@ -77,7 +88,14 @@ impl ImplicitState {
 
 /// `out = filter(A x)`, with `A = M' + Σ_s B_s ⊗ (e_i − e_j)(e_i − e_j)ᵀ`
 /// (`M'` the masses with the drag term, `B_s = h D_s + h² K_s`).
-fn multiply(model: &ForceModel, blocks: &[Mat3], mass: &[f32], filter: &[Filter], x: &[Vector], out: &mut [Vector]) {
+fn multiply(
+    model: &ForceModel,
+    blocks: &[Mat3],
+    mass: &[f32],
+    filter: &[Filter],
+    x: &[Vector],
+    out: &mut [Vector],
+) {
     for i in 0..x.len() {
         out[i] = x[i] * mass[i];
     }
@@ -104,7 +122,15 @@ fn dot(a: &[Vector], b: &[Vector]) -> f64 {
 /// blocks `h D + h² K`, the diagonal, and the right-hand side
 /// `h f(xe, ve) − M acc`, plus `h² K (v_j − v_i)` when `kv` is given (the
 /// paper's first step, linearised at the start of the step).
-fn assemble(model: &ForceModel, xe: &[Vector], ve: &[Vector], acc: &[Vector], kv: bool, h: f32, st: &mut ImplicitState) {
+fn assemble(
+    model: &ForceModel,
+    xe: &[Vector],
+    ve: &[Vector],
+    acc: &[Vector],
+    kv: bool,
+    h: f32,
+    st: &mut ImplicitState,
+) {
     let n = xe.len();
     let springs = model.springs;
     model.forces(xe, ve, &mut st.f);
@@ -151,7 +177,7 @@ pub(crate) fn step(
     x: &mut [Vector],
     v: &mut [Vector],
     st: &mut ImplicitState,
-    contacts: &Collider,
+    contacts: &mut Collider,
     h: f32,
     newton: u32,
     max_iterations: u32,
@@ -179,15 +205,29 @@ pub(crate) fn step(
         }
         assemble(model, &xe, &ve, &acc, round == 0, h, st);
         iterations += solve(model, v, &acc, st, contacts, max_iterations, tolerance);
+        // What the contact constraints did is momentum handed to the obstacles:
+        // the unfiltered residual A Δv − b of a constrained particle.
+        multiply(
+            model,
+            &st.blocks,
+            &st.mass,
+            &st.unfiltered,
+            &st.dv,
+            &mut st.q,
+        );
         for i in 0..n {
+            if let Filter::Plane(nrm) = st.filter[i] {
+                let reaction = nrm * nrm.dot(st.q[i] - st.b[i]);
+                contacts.add_impulse(contacts.contact_obstacle[i] as usize, x[i], -reaction);
+            }
             acc[i] += st.dv[i];
         }
     }
     for i in 0..n {
-        if model.inv_mass[i] == 0.0 {
-            continue;
+        // Pinned particles keep their velocity: a moving pin moves them.
+        if model.inv_mass[i] != 0.0 {
+            v[i] += acc[i];
         }
-        v[i] += acc[i];
         x[i] += v[i] * h;
     }
     st.xe = xe;
@@ -212,7 +252,11 @@ fn solve(
     for i in 0..n {
         let (filter, z) = if model.inv_mass[i] == 0.0 {
             (Filter::Fixed, Vector::ZERO)
-        } else if contacts.touching.get(i).copied().unwrap_or(false) {
+        } else if contacts.touching.get(i).copied().unwrap_or(false)
+            && contacts.contact_immovable[i]
+        {
+            // Only immovable obstacles are constraints of the solve: a dynamic
+            // body would be treated as infinitely heavy and thrown back.
             let nrm = contacts.contact_normal[i];
             let rel = v[i] + acc[i] - contacts.surface_velocity[i];
             // Held against the surface only while pushed into it.

@@ -163,7 +163,11 @@ impl Workspace {
 
 /// Advances the cloth by one substep `h` (seconds) with its integrator and
 /// returns the solver iterations it took. Collisions are not handled here.
-pub(crate) fn substep(cloth: &mut Cloth, h: f32, obstacles: &[crate::collision::Obstacle]) -> Result<u32, ClothError> {
+pub(crate) fn substep(
+    cloth: &mut Cloth,
+    h: f32,
+    obstacles: &[crate::collision::Obstacle],
+) -> Result<u32, ClothError> {
     let Cloth {
         particles,
         workspace,
@@ -194,7 +198,7 @@ pub(crate) fn substep(cloth: &mut Cloth, h: f32, obstacles: &[crate::collision::
                 x,
                 v,
                 &mut workspace.implicit,
-                &workspace.collider,
+                &mut workspace.collider,
                 h,
                 params.newton_iterations,
                 params.cg_max_iterations,
@@ -207,7 +211,15 @@ pub(crate) fn substep(cloth: &mut Cloth, h: f32, obstacles: &[crate::collision::
                 obstacles,
                 thickness: params.thickness,
             };
-            return fast_mass_spring::step(&model, x, v, &mut workspace.fms, contacts, h, params.fms_iterations);
+            return fast_mass_spring::step(
+                &model,
+                x,
+                v,
+                &mut workspace.fms,
+                contacts,
+                h,
+                params.fms_iterations,
+            );
         }
     }
     Ok(0)

@@ -1,0 +1,354 @@
+//! Co-simulation with a real rapier3d world: colliders as obstacles, moving
+//! and fast obstacles, two-way coupling, attachments.
+
+use cloth3d::metrics::run;
+use cloth3d::prelude::*;
+use cloth3d::rapier::RapierCoupling;
+use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
+use rapier3d::prelude::*;
+
+#[test]
+fn every_kind_of_collider_holds_the_cloth() {
+    let cube = [
+        Vector::new(-0.2, -0.2, -0.2),
+        Vector::new(0.2, -0.2, -0.2),
+        Vector::new(-0.2, 0.2, -0.2),
+        Vector::new(0.2, 0.2, -0.2),
+        Vector::new(-0.2, -0.2, 0.2),
+        Vector::new(0.2, -0.2, 0.2),
+        Vector::new(-0.2, 0.2, 0.2),
+        Vector::new(0.2, 0.2, 0.2),
+    ];
+    let tent = (
+        vec![
+            Vector::new(-0.5, -0.2, -0.5),
+            Vector::new(0.5, -0.2, -0.5),
+            Vector::new(-0.5, 0.2, 0.0),
+            Vector::new(0.5, 0.2, 0.0),
+            Vector::new(-0.5, -0.2, 0.5),
+            Vector::new(0.5, -0.2, 0.5),
+        ],
+        vec![[0, 2, 1], [1, 2, 3], [2, 4, 3], [3, 4, 5]],
+    );
+    let colliders = [
+        ("ball", ColliderBuilder::ball(0.2)),
+        ("cuboid", ColliderBuilder::cuboid(0.2, 0.2, 0.2)),
+        ("capsule", ColliderBuilder::capsule_x(0.2, 0.2)),
+        ("convex", ColliderBuilder::convex_hull(&cube).unwrap()),
+        ("trimesh", ColliderBuilder::trimesh(tent.0, tent.1).unwrap()),
+        (
+            "compound",
+            ColliderBuilder::compound(vec![
+                (Pose::translation(-0.15, 0.0, 0.0), SharedShape::ball(0.2)),
+                (
+                    Pose::translation(0.15, 0.0, 0.0),
+                    SharedShape::cuboid(0.1, 0.2, 0.1),
+                ),
+            ]),
+        ),
+    ];
+    for (name, collider) in colliders {
+        let mut world = PhysicsWorld::new();
+        world.insert(RigidBodyBuilder::fixed(), collider);
+        let mut cloth = ClothBuilder::new(20, 20)
+            .size(0.8, 0.8)
+            .horizontal(Vector::new(0.0, 0.5, 0.0))
+            .build()
+            .unwrap();
+        let mut coupling = RapierCoupling::new();
+        for _ in 0..90 {
+            let report = coupling.step_world(&mut cloth, &mut world).unwrap();
+            assert!(report.colliders <= 1);
+            world.step();
+        }
+        assert!(cloth.is_finite(), "{name}");
+        // The centre of the cloth rests on top of the collider (its top is at y = 0.2).
+        let middle = cloth.positions()[10 * 20 + 10];
+        assert!(
+            middle.y > 0.19 && middle.y < 0.25,
+            "{name}: middle at {middle:?}"
+        );
+    }
+}
+
+#[test]
+fn collision_groups_decide_what_the_cloth_sees_and_removed_colliders_are_fine() {
+    let mut world = PhysicsWorld::new();
+    let (_, ghost) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::cuboid(1.0, 0.1, 1.0).collision_groups(InteractionGroups::new(
+            Group::GROUP_2,
+            Group::GROUP_2,
+            InteractionTestMode::And,
+        )),
+    );
+    let mut cloth = ClothBuilder::new(10, 10)
+        .horizontal(Vector::new(0.0, 0.3, 0.0))
+        .build()
+        .unwrap();
+    let mut coupling = RapierCoupling::new();
+    coupling.groups =
+        InteractionGroups::new(Group::GROUP_1, Group::GROUP_1, InteractionTestMode::And);
+    for _ in 0..60 {
+        coupling.step_world(&mut cloth, &mut world).unwrap();
+        world.step();
+    }
+    assert!(
+        cloth.centroid().y < -0.5,
+        "the cloth fell through a collider it must not see"
+    );
+    // Seen again once the groups match; then removed between steps: no panic, it falls.
+    let mut cloth = ClothBuilder::new(10, 10)
+        .horizontal(Vector::new(0.0, 0.3, 0.0))
+        .build()
+        .unwrap();
+    coupling.groups = InteractionGroups::all();
+    for _ in 0..30 {
+        coupling.step_world(&mut cloth, &mut world).unwrap();
+        world.step();
+    }
+    assert!(cloth.centroid().y > 0.09, "{:?}", cloth.centroid());
+    world.remove_collider(ghost);
+    for _ in 0..30 {
+        coupling.step_world(&mut cloth, &mut world).unwrap();
+        world.step();
+    }
+    assert!(cloth.centroid().y < 0.0);
+}
+
+#[test]
+fn a_moving_body_drags_the_cloth_by_friction() {
+    // A kinematic conveyor: a slab moving along +x at 0.5 m/s.
+    let mut world = PhysicsWorld::new();
+    let (slab, _) = world.insert(
+        RigidBodyBuilder::kinematic_velocity_based().linvel(Vector::new(0.5, 0.0, 0.0)),
+        ColliderBuilder::cuboid(3.0, 0.1, 3.0),
+    );
+    let mut cloth = ClothBuilder::new(8, 8)
+        .size(0.4, 0.4)
+        .horizontal(Vector::new(0.0, 0.115, 0.0))
+        .build()
+        .unwrap();
+    let mut coupling = RapierCoupling::new();
+    coupling.friction = 1.0;
+    for _ in 0..60 {
+        coupling.step_world(&mut cloth, &mut world).unwrap();
+        world.step();
+    }
+    let moved = world.bodies[slab].translation().x;
+    assert!((moved - 0.5).abs() < 0.02);
+    assert!(
+        (cloth.centroid().x - moved).abs() < 0.05,
+        "the cloth stayed behind: {:?}",
+        cloth.centroid()
+    );
+}
+
+#[test]
+fn momentum_is_exchanged_not_created() {
+    // No gravity: a cloth thrown at a free dynamic ball. Whatever they do,
+    // the total momentum stays.
+    let mut world = PhysicsWorld::new();
+    world.gravity = Vector::ZERO;
+    let (ball, _) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.0, 0.0)),
+        ColliderBuilder::ball(0.2).density(100.0),
+    );
+    let mut cloth = ClothBuilder::new(12, 12)
+        .size(0.6, 0.6)
+        .horizontal(Vector::new(0.0, 0.4, 0.0))
+        .build()
+        .unwrap();
+    cloth.params.gravity = Vector::ZERO;
+    cloth.params.air_drag = 0.0;
+    for i in 0..cloth.particle_count() {
+        cloth.set_velocity(i, Vector::new(0.0, -2.0, 0.0)).unwrap();
+    }
+    let total = |cloth: &Cloth, world: &PhysicsWorld| {
+        cloth.momentum() + world.bodies[ball].linvel() * world.bodies[ball].mass()
+    };
+    let p0 = total(&cloth, &world);
+    let mut coupling = RapierCoupling::new();
+    let mut exchanged = Vector::ZERO;
+    for _ in 0..60 {
+        exchanged += coupling
+            .step_world(&mut cloth, &mut world)
+            .unwrap()
+            .impulse_to_bodies;
+        world.step();
+        let p = total(&cloth, &world);
+        assert!(
+            (p - p0).length() < 1e-3 * p0.length(),
+            "momentum {p0:?} became {p:?}"
+        );
+    }
+    // Something really was exchanged: the ball was pushed down.
+    assert!(exchanged.y < -0.1 * p0.length(), "exchanged {exchanged:?}");
+    assert!(world.bodies[ball].linvel().y < -0.05);
+    // One-way coupling: the ball is not pushed.
+    let mut world2 = PhysicsWorld::new();
+    world2.gravity = Vector::ZERO;
+    let (ball2, _) = world2.insert(
+        RigidBodyBuilder::dynamic(),
+        ColliderBuilder::ball(0.2).density(100.0),
+    );
+    let mut cloth2 = ClothBuilder::new(12, 12)
+        .size(0.6, 0.6)
+        .horizontal(Vector::new(0.0, 0.4, 0.0))
+        .build()
+        .unwrap();
+    cloth2.params.gravity = Vector::ZERO;
+    for i in 0..cloth2.particle_count() {
+        cloth2.set_velocity(i, Vector::new(0.0, -2.0, 0.0)).unwrap();
+    }
+    let mut one_way = RapierCoupling::new();
+    one_way.two_way = false;
+    for _ in 0..60 {
+        one_way.step_world(&mut cloth2, &mut world2).unwrap();
+        world2.step();
+    }
+    assert_eq!(world2.bodies[ball2].linvel(), Vector::ZERO);
+}
+
+#[test]
+fn hammock_holds_the_boxes_and_sags_under_them() {
+    let mut scene = Scene::build(SceneKind::Hammock, &SceneOptions::default()).unwrap();
+    let frames = scene.frames;
+    let m = run(&mut scene, frames).unwrap();
+    assert!(m.finite);
+    assert!(m.max_penetration_any_frame <= 0.002, "{m:?}");
+    // The boxes lie on the cloth: above the ground, below the pinned height.
+    let lowest_box = m.bodies_min_y.unwrap();
+    assert!(lowest_box > 0.25 && lowest_box < 0.5, "{m:?}");
+    // The cloth sags under them.
+    assert!(m.min_y < 0.4 && m.centroid[1] < 0.45, "{m:?}");
+    let side = scene.rapier.as_ref().unwrap();
+    for h in &side.bodies {
+        let b = &side.world.bodies[*h];
+        assert!(
+            b.translation().x.abs() < 0.4 && b.translation().z.abs() < 0.2,
+            "a box slid off: {:?}",
+            b.translation()
+        );
+    }
+}
+
+#[test]
+fn hammock_without_coupling_lets_the_boxes_fall_through() {
+    // The same world with the cloth seeing no collider: the boxes reach the ground.
+    // This is what makes the hammock test above able to fail.
+    let mut scene = Scene::build(SceneKind::Hammock, &SceneOptions::default()).unwrap();
+    let side = scene.rapier.as_mut().unwrap();
+    side.coupling.groups = InteractionGroups::none();
+    for _ in 0..120 {
+        scene.step_frame().unwrap();
+    }
+    let side = scene.rapier.as_ref().unwrap();
+    let lowest = side
+        .bodies
+        .iter()
+        .map(|h| side.world.bodies[*h].translation().y)
+        .fold(f32::MAX, f32::min);
+    assert!(
+        lowest < 0.15,
+        "the boxes should lie on the ground, lowest at {lowest}"
+    );
+}
+
+#[test]
+fn curtain_is_never_inside_the_ball_even_at_ten_metres_per_second() {
+    let m = {
+        let mut scene = Scene::build(SceneKind::Curtain, &SceneOptions::default()).unwrap();
+        run(&mut scene, 120).unwrap()
+    };
+    assert!(m.max_penetration_any_frame <= 0.002, "{m:?}");
+    // The ball pushed the curtain: it swung towards +z.
+    // Now at 10 m/s: the ball crosses the curtain in a few frames.
+    let mut scene = Scene::build(SceneKind::Curtain, &SceneOptions::default()).unwrap();
+    let mut deepest = 0.0f32;
+    let mut furthest = f32::MIN;
+    for f in 0..60 {
+        let t = (f + 1) as f32 / 60.0;
+        let side = scene.rapier.as_mut().unwrap();
+        let z = (-1.0 + 10.0 * t).min(1.0);
+        side.world.bodies[side.bodies[0]].set_next_kinematic_translation(Vector::new(0.0, 0.9, z));
+        side.coupling
+            .step_world(&mut scene.cloth, &mut side.world)
+            .unwrap();
+        side.world.step();
+        scene.frame += 1;
+        deepest = deepest.max(scene.max_penetration());
+        furthest = furthest.max(scene.cloth.centroid().z);
+    }
+    assert!(
+        deepest <= 0.002,
+        "a particle ended a frame {deepest} m inside the ball"
+    );
+    assert!(
+        furthest > 0.1,
+        "the ball should have carried the curtain along (+z {furthest})"
+    );
+}
+
+#[test]
+fn attached_particles_follow_their_body_and_pull_it() {
+    // A kinematic body spinning and moving: the attached corner follows within 1 mm.
+    let mut world = PhysicsWorld::new();
+    let (paddle, _) = world.insert(
+        RigidBodyBuilder::kinematic_velocity_based()
+            .translation(Vector::new(-0.5, 1.0, -0.5))
+            .linvel(Vector::new(0.3, 0.0, 0.0))
+            .angvel(Vector::new(0.0, 1.5, 0.0)),
+        ColliderBuilder::ball(0.05).sensor(true),
+    );
+    let mut cloth = ClothBuilder::new(10, 10)
+        .horizontal(Vector::new(0.0, 1.0, 0.0))
+        .build()
+        .unwrap();
+    let mut coupling = RapierCoupling::new();
+    coupling.attach(0, paddle, Vector::ZERO).unwrap();
+    coupling
+        .attach(9, paddle, Vector::new(1.0, 0.0, 0.0))
+        .unwrap();
+    for _ in 0..90 {
+        coupling.step_world(&mut cloth, &mut world).unwrap();
+        world.step();
+        let body = &world.bodies[paddle];
+        let target0 = body.position().transform_point(Vector::ZERO);
+        let target9 = body.position().transform_point(Vector::new(1.0, 0.0, 0.0));
+        assert!((cloth.positions()[0] - target0).length() < 1e-3);
+        assert!((cloth.positions()[9] - target9).length() < 1e-3);
+    }
+    // A cape on a free dynamic body in zero gravity... with the cloth's weight:
+    // the body is pulled down although gravity does not act on it.
+    let mut world = PhysicsWorld::new();
+    let (pole, _) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .gravity_scale(0.0)
+            .translation(Vector::new(0.0, 1.0, 0.0)),
+        ColliderBuilder::ball(0.05).density(1000.0).sensor(true),
+    );
+    let mut cloth = ClothBuilder::new(8, 8)
+        .size(0.5, 0.5)
+        .vertical(Vector::new(0.0, 0.75, 0.0))
+        .build()
+        .unwrap();
+    let mut coupling = RapierCoupling::new();
+    let top = 4;
+    coupling
+        .attach_here(&cloth, top, pole, &world.bodies)
+        .unwrap();
+    for _ in 0..30 {
+        coupling.step_world(&mut cloth, &mut world).unwrap();
+        world.step();
+    }
+    assert!(
+        world.bodies[pole].linvel().y < -0.01,
+        "the cloth's pull should drag the body down: {:?}",
+        world.bodies[pole].linvel()
+    );
+    // A removed body is an error, never a panic.
+    world.remove_body(pole);
+    let err = coupling.step_world(&mut cloth, &mut world).unwrap_err();
+    assert!(matches!(err, ClothError::StaleHandle { .. }), "{err}");
+}
