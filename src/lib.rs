@@ -34,6 +34,8 @@ pub mod metrics;
 pub mod pipeline;
 pub mod rapier;
 pub mod scenes;
+#[cfg(feature = "viewer")]
+pub mod viewer;
 
 pub use cloth::{
     Cloth, ClothBuilder, Material, PinPreset, SimulationParams, SpringKind, SpringParams, Substeps,

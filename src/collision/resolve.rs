@@ -216,6 +216,36 @@ impl Collider {
         }
     }
 
+    /// Finds which free particles touch an obstacle now (within the thickness
+    /// and a hair), with the contact normal, the surface velocity and the
+    /// obstacle, without moving anything. Solvers that treat contacts as
+    /// constraints call it at the start of a substep, so their result depends
+    /// only on the current state.
+    pub fn detect_contacts(&mut self, x: &[Vector], inv_mass: &[f32], obstacles: &[Obstacle], thickness: f32) {
+        for i in 0..x.len() {
+            self.touching[i] = false;
+            if obstacles.is_empty() || inv_mass[i] == 0.0 {
+                continue;
+            }
+            self.gather(x[i]);
+            let mut nearest = thickness + CONTACT_SLACK;
+            for c in 0..self.candidates.len() {
+                let o = self.candidates[c] as usize;
+                let Some(contact) = contact(&*obstacles[o].shape, &self.poses[o], x[i]) else {
+                    continue;
+                };
+                if contact.signed_distance < nearest {
+                    nearest = contact.signed_distance;
+                    self.touching[i] = true;
+                    self.contact_obstacle[i] = o as u32;
+                    self.contact_immovable[i] = obstacles[o].body.is_none();
+                    self.contact_normal[i] = contact.normal;
+                    self.surface_velocity[i] = self.surface_velocity_of(obstacles, o, x[i]);
+                }
+            }
+        }
+    }
+
     /// Pushes free particles out to the thickness, positions only, and
     /// remembers how far this last push went (for friction). Used inside
     /// iterative solvers so that they converge to a state outside the obstacles.

@@ -193,6 +193,9 @@ pub(crate) fn substep(
         Integrator::Verlet => verlet::step(&model, x, v, workspace, h),
         Integrator::Rk4 => rk4::step(&model, x, v, workspace, h),
         Integrator::ImplicitEuler => {
+            workspace
+                .collider
+                .detect_contacts(x, &particles.inv_mass, obstacles, params.thickness);
             return Ok(implicit_euler::step(
                 &model,
                 x,
@@ -274,7 +277,13 @@ pub fn stable_substep(cloth: &Cloth, integrator: Integrator) -> f32 {
                     sp.damping / sp.stiffness
                 })
                 .fold(f32::INFINITY, f32::min);
-            symplectic.min(ratio.max(symplectic / 8.0))
+            // A spring kind without damping is never damped by it: then only
+            // air drag helps, and a step far below the symplectic one.
+            if ratio > 0.0 {
+                symplectic.min(ratio)
+            } else {
+                symplectic / 8.0
+            }
         }
     };
     safety * h

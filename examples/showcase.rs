@@ -1,0 +1,406 @@
+//! The cloth3d showcase: every canonical scene in a window, with the spring
+//! trace, picking, pinning, dragging and live controls.
+//!
+//! ```sh
+//! cargo run --release --features viewer --example showcase
+//! # headless, no display needed:
+//! cargo run --release --features viewer --example showcase -- --screenshot drape.png --frames 120 --scene drape
+//! ```
+//!
+//! Keys: 1–6 scene · I integrator · M material · P pin preset · Space pause ·
+//! N one frame · R reset · W wind · T spring trace · click a particle to
+//! select it · X pin/unpin it · Ctrl+drag to pull it · H help.
+
+use cloth3d::prelude::*;
+use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
+use cloth3d::viewer::{self, SceneView, TraceMode};
+use kiss3d::egui;
+use kiss3d::prelude::*;
+
+struct Args {
+    screenshot: Option<String>,
+    frames: u32,
+    scene: SceneKind,
+    options: SceneOptions,
+    size: (u32, u32),
+}
+
+fn parse_args() -> Result<Args, String> {
+    let mut args = Args {
+        screenshot: None,
+        frames: 120,
+        scene: SceneKind::Drape,
+        options: SceneOptions::default(),
+        size: (1280, 720),
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(flag) = it.next() {
+        let mut value = || it.next().ok_or(format!("{flag} needs a value"));
+        match flag.as_str() {
+            "--screenshot" => args.screenshot = Some(value()?),
+            "--frames" => args.frames = value()?.parse().map_err(|_| "--frames takes a whole number".to_string())?,
+            "--scene" => args.scene = SceneKind::from_name(&value()?).map_err(|e| e.to_string())?,
+            "--integrator" => args.options.integrator = Some(Integrator::from_name(&value()?).map_err(|e| e.to_string())?),
+            "--material" => args.options.material = Some(Material::by_name(&value()?).map_err(|e| e.to_string())?),
+            "--variant" => args.options.variant = Some(PinPreset::from_name(&value()?).map_err(|e| e.to_string())?),
+            "--n" => args.options.n = Some(value()?.parse().map_err(|_| "--n takes a whole number".to_string())?),
+            "--size" => {
+                let v = value()?;
+                let (w, h) = v.split_once('x').ok_or("--size takes WIDTHxHEIGHT")?;
+                args.size = (w.parse().map_err(|_| "bad width")?, h.parse().map_err(|_| "bad height")?);
+            }
+            other => return Err(format!("unknown argument '{other}'")),
+        }
+    }
+    Ok(args)
+}
+
+#[kiss3d::main]
+async fn main() {
+    let args = match parse_args() {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(2);
+        }
+    };
+    if let Some(path) = &args.screenshot {
+        match viewer::screenshot(args.scene, &args.options, args.frames, std::path::Path::new(path), args.size).await {
+            Ok(()) => println!("wrote {path}"),
+            Err(e) => {
+                eprintln!("error: {e}");
+                std::process::exit(1);
+            }
+        }
+        return;
+    }
+    interactive(args).await;
+}
+
+/// Everything the window shows and the keys change.
+struct Showcase {
+    kind: SceneKind,
+    options: SceneOptions,
+    scene: Scene,
+    view: SceneView,
+    camera: OrbitCamera3d,
+    paused: bool,
+    trace: TraceMode,
+    selected: Option<usize>,
+    dragging: Option<(usize, bool)>,
+    wind_on: bool,
+    help: bool,
+    message: String,
+    step_ms: f64,
+    frame_ms: f64,
+}
+
+impl Showcase {
+    fn load(root: &mut SceneNode3d, kind: SceneKind, options: SceneOptions) -> Result<(Scene, SceneView), ClothError> {
+        let scene = Scene::build(kind, &options)?;
+        let view = SceneView::new(root, &scene);
+        Ok((scene, view))
+    }
+
+    fn switch(&mut self, root: &mut SceneNode3d, kind: SceneKind, keep_camera: bool) {
+        if kind != self.kind {
+            self.options.variant = None;
+        }
+        match Self::load(root, kind, self.options.clone()) {
+            Ok((scene, view)) => {
+                let old = std::mem::replace(&mut self.view, view);
+                old.remove();
+                self.scene = scene;
+                if !keep_camera || kind != self.kind {
+                    self.camera = viewer::camera_for(kind);
+                }
+                self.kind = kind;
+                self.selected = None;
+                self.dragging = None;
+                self.wind_on = !self.scene.cloth.params.wind.is_calm();
+                self.message.clear();
+            }
+            Err(e) => self.message = e.to_string(),
+        }
+    }
+}
+
+fn next_in<T: Copy + PartialEq>(all: &[T], current: T) -> T {
+    let i = all.iter().position(|x| *x == current).unwrap_or(0);
+    all[(i + 1) % all.len()]
+}
+
+async fn interactive(args: Args) {
+    let mut window = Window::new("cloth3d showcase").await;
+    window.set_background_color(viewer::BACKGROUND);
+    let mut root = SceneNode3d::empty();
+    viewer::add_lights(&mut root);
+    let (scene, view) = match Showcase::load(&mut root, args.scene, args.options.clone()) {
+        Ok(x) => x,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(2);
+        }
+    };
+    let mut app = Showcase {
+        kind: args.scene,
+        options: args.options,
+        wind_on: !scene.cloth.params.wind.is_calm(),
+        scene,
+        view,
+        camera: viewer::camera_for(args.scene),
+        paused: false,
+        trace: TraceMode::Off,
+        selected: None,
+        dragging: None,
+        help: true,
+        message: String::new(),
+        step_ms: 0.0,
+        frame_ms: 0.0,
+    };
+    let font = Font::default();
+    let mut cursor = Vec2::ZERO;
+    let mut last_frame = std::time::Instant::now();
+    let default_wind = Wind::new(Vector::new(1.0, 0.0, 0.3), 8.0);
+    while window.render_3d(&mut root, &mut app.camera).await {
+        app.frame_ms = last_frame.elapsed().as_secs_f64() * 1000.0;
+        last_frame = std::time::Instant::now();
+        let size = Vec2::new(window.size()[0] as f32, window.size()[1] as f32);
+        let mut step_once = false;
+        let ui_mouse = window.is_egui_capturing_mouse();
+        for mut event in window.events().iter() {
+            match event.value {
+                WindowEvent::CursorPos(x, y, _) => {
+                    cursor = Vec2::new(x as f32, y as f32);
+                    if app.dragging.is_some() {
+                        event.inhibited = true;
+                    }
+                }
+                WindowEvent::MouseButton(MouseButton::Button1, Action::Press, mods) if !ui_mouse => {
+                    let (origin, dir) = app.camera.unproject(cursor, size);
+                    let picked = viewer::pick(&app.scene.cloth, origin, dir, 0.03);
+                    if let Some(i) = picked {
+                        app.selected = Some(i);
+                        if mods.contains(Modifiers::Control) {
+                            let was_pinned = app.scene.cloth.is_pinned(i);
+                            let _ = app.scene.cloth.pin(i);
+                            app.dragging = Some((i, was_pinned));
+                            event.inhibited = true;
+                        }
+                    }
+                }
+                WindowEvent::MouseButton(MouseButton::Button1, Action::Release, _) => {
+                    if let Some((i, was_pinned)) = app.dragging.take() {
+                        if !was_pinned {
+                            let _ = app.scene.cloth.unpin(i);
+                        }
+                        event.inhibited = true;
+                    }
+                }
+                WindowEvent::Key(key, Action::Press, _) if !window_is_typing(&window) => {
+                    let kinds = SceneKind::ALL;
+                    let scene_key = [Key::Key1, Key::Key2, Key::Key3, Key::Key4, Key::Key5, Key::Key6]
+                        .iter()
+                        .position(|k| *k == key);
+                    if let Some(s) = scene_key {
+                        app.switch(&mut root, kinds[s], false);
+                        continue;
+                    }
+                    match key {
+                        Key::Space => app.paused = !app.paused,
+                        Key::N => {
+                            app.paused = true;
+                            step_once = true;
+                        }
+                        Key::R => app.switch(&mut root, app.kind, true),
+                        Key::T => app.trace = app.trace.next(),
+                        Key::H => app.help = !app.help,
+                        Key::W => {
+                            app.wind_on = !app.wind_on;
+                            app.scene.cloth.params.wind = if app.wind_on { default_wind } else { Wind::NONE };
+                        }
+                        Key::I => {
+                            let next = next_in(&Integrator::ALL, app.scene.cloth.params.integrator);
+                            app.scene.cloth.set_integrator(next);
+                            app.scene.cloth.params.substeps = if next.is_explicit() { Substeps::Auto } else { Substeps::Fixed(1) };
+                            app.options.integrator = Some(next);
+                        }
+                        Key::M => {
+                            let names = Material::PRESET_NAMES;
+                            let next = next_in(&names, names.iter().copied().find(|n| *n == app.scene.cloth.material.name).unwrap_or("cotton"));
+                            if let Ok(m) = Material::by_name(next) {
+                                app.scene.cloth.material = m.clone();
+                                app.options.material = Some(m);
+                            }
+                        }
+                        Key::P => {
+                            let presets = if app.kind.variants().is_empty() { &PinPreset::ALL[..] } else { app.kind.variants() };
+                            let current = app.options.variant.unwrap_or(presets[0]);
+                            let next = next_in(presets, current);
+                            if app.kind.variants().is_empty() {
+                                let _ = app.scene.cloth.apply_pin_preset(next);
+                                app.options.variant = Some(next);
+                                app.message = format!("pins: {}", next.name());
+                            } else {
+                                app.options.variant = Some(next);
+                                app.switch(&mut root, app.kind, true);
+                            }
+                        }
+                        Key::X => {
+                            if let Some(i) = app.selected {
+                                let _ = if app.scene.cloth.is_pinned(i) { app.scene.cloth.unpin(i) } else { app.scene.cloth.pin(i) };
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+                _ => {}
+            }
+        }
+
+        // Dragging: the grabbed particle follows the cursor on a plane facing the camera.
+        if let Some((i, _)) = app.dragging {
+            let (origin, dir) = app.camera.unproject(cursor, size);
+            let p = app.scene.cloth.positions()[i];
+            let normal = (app.camera.eye() - p).normalize_or(Vec3::Z);
+            let denom = dir.dot(normal);
+            if denom.abs() > 1e-6 {
+                let t = (p - origin).dot(normal) / denom;
+                let target = origin + dir * t;
+                let _ = app.scene.cloth.set_velocity(i, (target - p) / app.scene.dt);
+            }
+        }
+
+        if !app.paused || step_once {
+            let start = std::time::Instant::now();
+            match app.scene.step_frame() {
+                Ok(_) => app.message.retain(|_| true),
+                Err(e) => {
+                    app.message = e.to_string();
+                    app.paused = true;
+                }
+            }
+            app.step_ms = start.elapsed().as_secs_f64() * 1000.0;
+            if let Some((i, _)) = app.dragging {
+                let _ = app.scene.cloth.set_velocity(i, Vector::ZERO);
+            }
+        }
+        app.view.sync(&app.scene);
+
+        viewer::draw_trace(&mut window, &app.scene.cloth, app.trace);
+        viewer::draw_pins(&mut window, &app.scene.cloth);
+        if let Some(i) = app.selected {
+            viewer::draw_neighbours(&mut window, &app.scene.cloth, i);
+        }
+        overlay_text(&mut window, &font, &app);
+        controls(&mut window, &mut app);
+    }
+}
+
+fn window_is_typing(window: &Window) -> bool {
+    window.is_egui_capturing_keyboard()
+}
+
+fn overlay_text(window: &mut Window, font: &std::sync::Arc<Font>, app: &Showcase) {
+    let cloth = &app.scene.cloth;
+    let e = cloth.energy();
+    let lines = [
+        format!(
+            "{}{}  |  {}  |  {}  |  {} particles, {} springs",
+            app.kind.name(),
+            app.scene.variant.map(|v| format!(" ({})", v.name())).unwrap_or_default(),
+            cloth.params.integrator,
+            cloth.material.name,
+            cloth.particle_count(),
+            cloth.springs().len()
+        ),
+        format!(
+            "frame {:.1} ms  step {:.2} ms  substeps {}  |  energy {:.3} J (kinetic {:.3})  |  stretch {:.2}%{}",
+            app.frame_ms,
+            app.step_ms,
+            cloth.substeps_for(app.scene.dt),
+            e.total(),
+            e.kinetic,
+            100.0 * cloth.max_strain(SpringKind::Stretch),
+            if app.paused { "  |  PAUSED" } else { "" }
+        ),
+        format!("trace: {}  |  wind: {}", app.trace.name(), if app.wind_on { "on" } else { "off" }),
+        app.message.clone(),
+    ];
+    for (k, line) in lines.iter().enumerate() {
+        window.draw_text(line, Vec2::new(12.0, 10.0 + 34.0 * k as f32), 30.0, font, WHITE);
+    }
+    if app.help {
+        let help = "1-6 scene  I integrator  M material  P pins  Space pause  N step  R reset  W wind  T trace  click select  X pin  Ctrl+drag pull  H help";
+        let y = window.size()[1] as f32 * window.scale_factor() as f32 - 44.0;
+        window.draw_text(help, Vec2::new(12.0, y), 28.0, font, Color::new(0.8, 0.8, 0.85, 1.0));
+    }
+}
+
+/// Live controls: every change applies at the next frame, no restart.
+fn controls(window: &mut Window, app: &mut Showcase) {
+    let cloth = &mut app.scene.cloth;
+    let mut dt = app.scene.dt;
+    window.draw_ui(|ctx| {
+        egui::Window::new("controls").default_pos([10.0, 160.0]).show(ctx, |ui| {
+            for kind in SpringKind::ALL {
+                let p = cloth.material.params_mut(kind);
+                ui.label(format!("{} springs", kind.name()));
+                ui.add(egui::Slider::new(&mut p.stiffness, 0.1..=1.0e6).logarithmic(true).text("k (N/m)"));
+                ui.add(egui::Slider::new(&mut p.damping, 0.0..=50.0).logarithmic(true).text("c (N·s/m)"));
+            }
+            let mut mass = cloth.total_mass();
+            if ui.add(egui::Slider::new(&mut mass, 0.05..=20.0).logarithmic(true).text("mass (kg)")).changed() {
+                let _ = cloth.set_total_mass(mass);
+            }
+            ui.add(egui::Slider::new(&mut cloth.params.air_drag, 0.0..=5.0).text("air drag (1/s)"));
+            ui.add(egui::Slider::new(&mut cloth.params.wind.strength, 0.0..=40.0).text("wind (N/m²)"));
+            let mut heading = cloth.params.wind.direction.z.atan2(cloth.params.wind.direction.x);
+            if ui.add(egui::Slider::new(&mut heading, -3.14..=3.14).text("wind heading (rad)")).changed() {
+                cloth.params.wind.direction = Vector::new(heading.cos(), 0.0, heading.sin());
+            }
+            let mut friction = app.scene.obstacles.first().map_or(0.5, |o| o.friction);
+            if ui.add(egui::Slider::new(&mut friction, 0.0..=2.0).text("friction")).changed() {
+                for o in &mut app.scene.obstacles {
+                    o.friction = friction;
+                }
+                if let Some(side) = &mut app.scene.rapier {
+                    side.coupling.friction = friction;
+                }
+            }
+            ui.add(egui::Slider::new(&mut dt, 1.0 / 240.0..=1.0 / 20.0).text("dt (s)"));
+            let mut auto = cloth.params.substeps == Substeps::Auto;
+            let mut k = match cloth.params.substeps {
+                Substeps::Fixed(k) => k,
+                Substeps::Auto => cloth.substeps_for(dt),
+            };
+            ui.checkbox(&mut auto, "automatic substeps");
+            if !auto {
+                ui.add(egui::Slider::new(&mut k, 1..=400).text("substeps"));
+            }
+            cloth.params.substeps = if auto { Substeps::Auto } else { Substeps::Fixed(k) };
+            egui::ComboBox::from_label("integrator")
+                .selected_text(cloth.params.integrator.name())
+                .show_ui(ui, |ui| {
+                    for i in Integrator::ALL {
+                        if ui.selectable_label(cloth.params.integrator == i, i.name()).clicked() {
+                            cloth.set_integrator(i);
+                        }
+                    }
+                });
+            egui::ComboBox::from_label("material")
+                .selected_text(cloth.material.name.clone())
+                .show_ui(ui, |ui| {
+                    for m in Material::presets() {
+                        if ui.selectable_label(cloth.material.name == m.name, &m.name).clicked() {
+                            cloth.material = m;
+                        }
+                    }
+                });
+        });
+    });
+    app.scene.dt = dt;
+    if let Some(side) = &mut app.scene.rapier {
+        side.world.integration_parameters.dt = dt;
+    }
+}
