@@ -30,7 +30,11 @@ fn main() -> Result<(), ClothError> {
         println!(
             "{name:<10} {:5.2} kg  sag {:.3} m  stretch {:5.2}%",
             cloth.total_mass(),
-            1.5 - cloth.positions().iter().map(|p| p.y).fold(f32::INFINITY, f32::min),
+            1.5 - cloth
+                .positions()
+                .iter()
+                .map(|p| p.y)
+                .fold(f32::INFINITY, f32::min),
             100.0 * cloth.max_strain(SpringKind::Stretch)
         );
     }

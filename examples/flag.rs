@@ -18,7 +18,13 @@ fn main() -> Result<(), ClothError> {
         cloth.step(1.0 / 60.0, &[])?;
         if frame % 60 == 0 {
             let tip = cloth.positions()[cloth.index(10, 31)?];
-            println!("t = {:.0} s  flag tip at ({:+.2}, {:+.2}, {:+.2}) m", cloth.time(), tip.x, tip.y, tip.z);
+            println!(
+                "t = {:.0} s  flag tip at ({:+.2}, {:+.2}, {:+.2}) m",
+                cloth.time(),
+                tip.x,
+                tip.y,
+                tip.z
+            );
         }
     }
     Ok(())

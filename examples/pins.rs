@@ -12,7 +12,10 @@ fn main() -> Result<(), ClothError> {
     for _ in 0..60 {
         cloth.step(1.0 / 60.0, &[])?;
     }
-    println!("hanging from four corners: lowest point {:.3} m", lowest(&cloth));
+    println!(
+        "hanging from four corners: lowest point {:.3} m",
+        lowest(&cloth)
+    );
     // Let go of one corner and pin the middle instead.
     cloth.unpin_cell(32, 32)?;
     cloth.pin_cell(16, 16)?;
@@ -25,5 +28,9 @@ fn main() -> Result<(), ClothError> {
 }
 
 fn lowest(cloth: &Cloth) -> f32 {
-    cloth.positions().iter().map(|p| p.y).fold(f32::INFINITY, f32::min)
+    cloth
+        .positions()
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::INFINITY, f32::min)
 }

@@ -11,7 +11,10 @@ use rapier3d::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder};
 fn main() -> Result<(), ClothError> {
     // The user's world, built as usual.
     let mut world = PhysicsWorld::new();
-    world.insert(RigidBodyBuilder::fixed().translation(Vector::new(0.0, -0.1, 0.0)), ColliderBuilder::cuboid(3.0, 0.1, 3.0));
+    world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(0.0, -0.1, 0.0)),
+        ColliderBuilder::cuboid(3.0, 0.1, 3.0),
+    );
     for (i, x) in [-0.3f32, 0.0, 0.3].into_iter().enumerate() {
         world.insert(
             RigidBodyBuilder::dynamic().translation(Vector::new(x, 0.1 + 0.2 * i as f32, 0.0)),

@@ -38,16 +38,38 @@ fn parse_args() -> Result<Args, String> {
         let mut value = || it.next().ok_or(format!("{flag} needs a value"));
         match flag.as_str() {
             "--screenshot" => args.screenshot = Some(value()?),
-            "--frames" => args.frames = value()?.parse().map_err(|_| "--frames takes a whole number".to_string())?,
+            "--frames" => {
+                args.frames = value()?
+                    .parse()
+                    .map_err(|_| "--frames takes a whole number".to_string())?
+            }
             "--scene" => args.scene = SceneKind::from_name(&value()?).map_err(|e| e.to_string())?,
-            "--integrator" => args.options.integrator = Some(Integrator::from_name(&value()?).map_err(|e| e.to_string())?),
-            "--material" => args.options.material = Some(Material::by_name(&value()?).map_err(|e| e.to_string())?),
-            "--variant" => args.options.variant = Some(PinPreset::from_name(&value()?).map_err(|e| e.to_string())?),
-            "--n" => args.options.n = Some(value()?.parse().map_err(|_| "--n takes a whole number".to_string())?),
+            "--integrator" => {
+                args.options.integrator =
+                    Some(Integrator::from_name(&value()?).map_err(|e| e.to_string())?)
+            }
+            "--material" => {
+                args.options.material =
+                    Some(Material::by_name(&value()?).map_err(|e| e.to_string())?)
+            }
+            "--variant" => {
+                args.options.variant =
+                    Some(PinPreset::from_name(&value()?).map_err(|e| e.to_string())?)
+            }
+            "--n" => {
+                args.options.n = Some(
+                    value()?
+                        .parse()
+                        .map_err(|_| "--n takes a whole number".to_string())?,
+                )
+            }
             "--size" => {
                 let v = value()?;
                 let (w, h) = v.split_once('x').ok_or("--size takes WIDTHxHEIGHT")?;
-                args.size = (w.parse().map_err(|_| "bad width")?, h.parse().map_err(|_| "bad height")?);
+                args.size = (
+                    w.parse().map_err(|_| "bad width")?,
+                    h.parse().map_err(|_| "bad height")?,
+                );
             }
             other => return Err(format!("unknown argument '{other}'")),
         }
@@ -65,7 +87,15 @@ async fn main() {
         }
     };
     if let Some(path) = &args.screenshot {
-        match viewer::screenshot(args.scene, &args.options, args.frames, std::path::Path::new(path), args.size).await {
+        match viewer::screenshot(
+            args.scene,
+            &args.options,
+            args.frames,
+            std::path::Path::new(path),
+            args.size,
+        )
+        .await
+        {
             Ok(()) => println!("wrote {path}"),
             Err(e) => {
                 eprintln!("error: {e}");
@@ -96,7 +126,11 @@ struct Showcase {
 }
 
 impl Showcase {
-    fn load(root: &mut SceneNode3d, kind: SceneKind, options: SceneOptions) -> Result<(Scene, SceneView), ClothError> {
+    fn load(
+        root: &mut SceneNode3d,
+        kind: SceneKind,
+        options: SceneOptions,
+    ) -> Result<(Scene, SceneView), ClothError> {
         let scene = Scene::build(kind, &options)?;
         let view = SceneView::new(root, &scene);
         Ok((scene, view))
@@ -176,7 +210,9 @@ async fn interactive(args: Args) {
                         event.inhibited = true;
                     }
                 }
-                WindowEvent::MouseButton(MouseButton::Button1, Action::Press, mods) if !ui_mouse => {
+                WindowEvent::MouseButton(MouseButton::Button1, Action::Press, mods)
+                    if !ui_mouse =>
+                {
                     let (origin, dir) = app.camera.unproject(cursor, size);
                     let picked = viewer::pick(&app.scene.cloth, origin, dir, 0.03);
                     if let Some(i) = picked {
@@ -199,9 +235,16 @@ async fn interactive(args: Args) {
                 }
                 WindowEvent::Key(key, Action::Press, _) if !window_is_typing(&window) => {
                     let kinds = SceneKind::ALL;
-                    let scene_key = [Key::Key1, Key::Key2, Key::Key3, Key::Key4, Key::Key5, Key::Key6]
-                        .iter()
-                        .position(|k| *k == key);
+                    let scene_key = [
+                        Key::Key1,
+                        Key::Key2,
+                        Key::Key3,
+                        Key::Key4,
+                        Key::Key5,
+                        Key::Key6,
+                    ]
+                    .iter()
+                    .position(|k| *k == key);
                     if let Some(s) = scene_key {
                         app.switch(&mut root, kinds[s], false);
                         continue;
@@ -217,24 +260,43 @@ async fn interactive(args: Args) {
                         Key::H => app.help = !app.help,
                         Key::W => {
                             app.wind_on = !app.wind_on;
-                            app.scene.cloth.params.wind = if app.wind_on { default_wind } else { Wind::NONE };
+                            app.scene.cloth.params.wind = if app.wind_on {
+                                default_wind
+                            } else {
+                                Wind::NONE
+                            };
                         }
                         Key::I => {
                             let next = next_in(&Integrator::ALL, app.scene.cloth.params.integrator);
                             app.scene.cloth.set_integrator(next);
-                            app.scene.cloth.params.substeps = if next.is_explicit() { Substeps::Auto } else { Substeps::Fixed(1) };
+                            app.scene.cloth.params.substeps = if next.is_explicit() {
+                                Substeps::Auto
+                            } else {
+                                Substeps::Fixed(1)
+                            };
                             app.options.integrator = Some(next);
                         }
                         Key::M => {
                             let names = Material::PRESET_NAMES;
-                            let next = next_in(&names, names.iter().copied().find(|n| *n == app.scene.cloth.material.name).unwrap_or("cotton"));
+                            let next = next_in(
+                                &names,
+                                names
+                                    .iter()
+                                    .copied()
+                                    .find(|n| *n == app.scene.cloth.material.name)
+                                    .unwrap_or("cotton"),
+                            );
                             if let Ok(m) = Material::by_name(next) {
                                 app.scene.cloth.material = m.clone();
                                 app.options.material = Some(m);
                             }
                         }
                         Key::P => {
-                            let presets = if app.kind.variants().is_empty() { &PinPreset::ALL[..] } else { app.kind.variants() };
+                            let presets = if app.kind.variants().is_empty() {
+                                &PinPreset::ALL[..]
+                            } else {
+                                app.kind.variants()
+                            };
                             let current = app.options.variant.unwrap_or(presets[0]);
                             let next = next_in(presets, current);
                             if app.kind.variants().is_empty() {
@@ -248,7 +310,11 @@ async fn interactive(args: Args) {
                         }
                         Key::X => {
                             if let Some(i) = app.selected {
-                                let _ = if app.scene.cloth.is_pinned(i) { app.scene.cloth.unpin(i) } else { app.scene.cloth.pin(i) };
+                                let _ = if app.scene.cloth.is_pinned(i) {
+                                    app.scene.cloth.unpin(i)
+                                } else {
+                                    app.scene.cloth.pin(i)
+                                };
                             }
                         }
                         _ => {}
@@ -328,12 +394,24 @@ fn overlay_text(window: &mut Window, font: &std::sync::Arc<Font>, app: &Showcase
         app.message.clone(),
     ];
     for (k, line) in lines.iter().enumerate() {
-        window.draw_text(line, Vec2::new(12.0, 10.0 + 34.0 * k as f32), 30.0, font, WHITE);
+        window.draw_text(
+            line,
+            Vec2::new(12.0, 10.0 + 34.0 * k as f32),
+            30.0,
+            font,
+            WHITE,
+        );
     }
     if app.help {
         let help = "1-6 scene  I integrator  M material  P pins  Space pause  N step  R reset  W wind  T trace  click select  X pin  Ctrl+drag pull  H help";
         let y = window.size()[1] as f32 * window.scale_factor() as f32 - 44.0;
-        window.draw_text(help, Vec2::new(12.0, y), 28.0, font, Color::new(0.8, 0.8, 0.85, 1.0));
+        window.draw_text(
+            help,
+            Vec2::new(12.0, y),
+            28.0,
+            font,
+            Color::new(0.8, 0.8, 0.85, 1.0),
+        );
     }
 }
 
@@ -342,62 +420,105 @@ fn controls(window: &mut Window, app: &mut Showcase) {
     let cloth = &mut app.scene.cloth;
     let mut dt = app.scene.dt;
     window.draw_ui(|ctx| {
-        egui::Window::new("controls").default_pos([10.0, 160.0]).show(ctx, |ui| {
-            for kind in SpringKind::ALL {
-                let p = cloth.material.params_mut(kind);
-                ui.label(format!("{} springs", kind.name()));
-                ui.add(egui::Slider::new(&mut p.stiffness, 0.1..=1.0e6).logarithmic(true).text("k (N/m)"));
-                ui.add(egui::Slider::new(&mut p.damping, 0.0..=50.0).logarithmic(true).text("c (N·s/m)"));
-            }
-            let mut mass = cloth.total_mass();
-            if ui.add(egui::Slider::new(&mut mass, 0.05..=20.0).logarithmic(true).text("mass (kg)")).changed() {
-                let _ = cloth.set_total_mass(mass);
-            }
-            ui.add(egui::Slider::new(&mut cloth.params.air_drag, 0.0..=5.0).text("air drag (1/s)"));
-            ui.add(egui::Slider::new(&mut cloth.params.wind.strength, 0.0..=40.0).text("wind (N/m²)"));
-            let mut heading = cloth.params.wind.direction.z.atan2(cloth.params.wind.direction.x);
-            if ui.add(egui::Slider::new(&mut heading, -3.14..=3.14).text("wind heading (rad)")).changed() {
-                cloth.params.wind.direction = Vector::new(heading.cos(), 0.0, heading.sin());
-            }
-            let mut friction = app.scene.obstacles.first().map_or(0.5, |o| o.friction);
-            if ui.add(egui::Slider::new(&mut friction, 0.0..=2.0).text("friction")).changed() {
-                for o in &mut app.scene.obstacles {
-                    o.friction = friction;
+        egui::Window::new("controls")
+            .default_pos([10.0, 160.0])
+            .show(ctx, |ui| {
+                for kind in SpringKind::ALL {
+                    let p = cloth.material.params_mut(kind);
+                    ui.label(format!("{} springs", kind.name()));
+                    ui.add(
+                        egui::Slider::new(&mut p.stiffness, 0.1..=1.0e6)
+                            .logarithmic(true)
+                            .text("k (N/m)"),
+                    );
+                    ui.add(
+                        egui::Slider::new(&mut p.damping, 0.0..=50.0)
+                            .logarithmic(true)
+                            .text("c (N·s/m)"),
+                    );
                 }
-                if let Some(side) = &mut app.scene.rapier {
-                    side.coupling.friction = friction;
+                let mut mass = cloth.total_mass();
+                if ui
+                    .add(
+                        egui::Slider::new(&mut mass, 0.05..=20.0)
+                            .logarithmic(true)
+                            .text("mass (kg)"),
+                    )
+                    .changed()
+                {
+                    let _ = cloth.set_total_mass(mass);
                 }
-            }
-            ui.add(egui::Slider::new(&mut dt, 1.0 / 240.0..=1.0 / 20.0).text("dt (s)"));
-            let mut auto = cloth.params.substeps == Substeps::Auto;
-            let mut k = match cloth.params.substeps {
-                Substeps::Fixed(k) => k,
-                Substeps::Auto => cloth.substeps_for(dt),
-            };
-            ui.checkbox(&mut auto, "automatic substeps");
-            if !auto {
-                ui.add(egui::Slider::new(&mut k, 1..=400).text("substeps"));
-            }
-            cloth.params.substeps = if auto { Substeps::Auto } else { Substeps::Fixed(k) };
-            egui::ComboBox::from_label("integrator")
-                .selected_text(cloth.params.integrator.name())
-                .show_ui(ui, |ui| {
-                    for i in Integrator::ALL {
-                        if ui.selectable_label(cloth.params.integrator == i, i.name()).clicked() {
-                            cloth.set_integrator(i);
-                        }
+                ui.add(
+                    egui::Slider::new(&mut cloth.params.air_drag, 0.0..=5.0).text("air drag (1/s)"),
+                );
+                ui.add(
+                    egui::Slider::new(&mut cloth.params.wind.strength, 0.0..=40.0)
+                        .text("wind (N/m²)"),
+                );
+                let mut heading = cloth
+                    .params
+                    .wind
+                    .direction
+                    .z
+                    .atan2(cloth.params.wind.direction.x);
+                if ui
+                    .add(egui::Slider::new(&mut heading, -std::f32::consts::PI..=std::f32::consts::PI).text("wind heading (rad)"))
+                    .changed()
+                {
+                    cloth.params.wind.direction = Vector::new(heading.cos(), 0.0, heading.sin());
+                }
+                let mut friction = app.scene.obstacles.first().map_or(0.5, |o| o.friction);
+                if ui
+                    .add(egui::Slider::new(&mut friction, 0.0..=2.0).text("friction"))
+                    .changed()
+                {
+                    for o in &mut app.scene.obstacles {
+                        o.friction = friction;
                     }
-                });
-            egui::ComboBox::from_label("material")
-                .selected_text(cloth.material.name.clone())
-                .show_ui(ui, |ui| {
-                    for m in Material::presets() {
-                        if ui.selectable_label(cloth.material.name == m.name, &m.name).clicked() {
-                            cloth.material = m;
-                        }
+                    if let Some(side) = &mut app.scene.rapier {
+                        side.coupling.friction = friction;
                     }
-                });
-        });
+                }
+                ui.add(egui::Slider::new(&mut dt, 1.0 / 240.0..=1.0 / 20.0).text("dt (s)"));
+                let mut auto = cloth.params.substeps == Substeps::Auto;
+                let mut k = match cloth.params.substeps {
+                    Substeps::Fixed(k) => k,
+                    Substeps::Auto => cloth.substeps_for(dt),
+                };
+                ui.checkbox(&mut auto, "automatic substeps");
+                if !auto {
+                    ui.add(egui::Slider::new(&mut k, 1..=400).text("substeps"));
+                }
+                cloth.params.substeps = if auto {
+                    Substeps::Auto
+                } else {
+                    Substeps::Fixed(k)
+                };
+                egui::ComboBox::from_label("integrator")
+                    .selected_text(cloth.params.integrator.name())
+                    .show_ui(ui, |ui| {
+                        for i in Integrator::ALL {
+                            if ui
+                                .selectable_label(cloth.params.integrator == i, i.name())
+                                .clicked()
+                            {
+                                cloth.set_integrator(i);
+                            }
+                        }
+                    });
+                egui::ComboBox::from_label("material")
+                    .selected_text(cloth.material.name.clone())
+                    .show_ui(ui, |ui| {
+                        for m in Material::presets() {
+                            if ui
+                                .selectable_label(cloth.material.name == m.name, &m.name)
+                                .clicked()
+                            {
+                                cloth.material = m;
+                            }
+                        }
+                    });
+            });
     });
     app.scene.dt = dt;
     if let Some(side) = &mut app.scene.rapier {

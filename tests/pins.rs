@@ -37,18 +37,19 @@ fn pinned_particles_never_move_and_unpinned_ones_fall() {
     assert_eq!(pinned, vec![0, 9]);
     let before: Vec<Vector> = pinned.iter().map(|&i| cloth.positions()[i]).collect();
     let far_corner = cloth.positions()[99];
+    let mut swing = 0.0f32;
     for integrator in Integrator::ALL {
         cloth.set_integrator(integrator);
         for _ in 0..20 {
             cloth.step(1.0 / 60.0, &[]).unwrap();
+            swing = swing.max((cloth.positions()[99] - far_corner).length());
         }
     }
     for (k, &i) in pinned.iter().enumerate() {
         assert_eq!(cloth.positions()[i], before[k], "pinned particle {i} moved");
     }
     // The far corner is free: it swings down through the pins' plane, a 1 m pendulum.
-    let moved = (cloth.positions()[99] - far_corner).length();
-    assert!(moved > 0.5, "far corner moved only {moved} m");
+    assert!(swing > 0.5, "far corner moved only {swing} m");
     // Unpin at run time: the corner falls too.
     cloth.unpin_cell(0, 9).unwrap();
     for _ in 0..30 {

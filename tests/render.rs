@@ -20,7 +20,11 @@ fn mean_difference(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
     let total: u64 = a
         .pixels()
         .zip(b.pixels())
-        .map(|(p, q)| (0..3).map(|c| (p.0[c] as i32 - q.0[c] as i32).unsigned_abs() as u64).sum::<u64>())
+        .map(|(p, q)| {
+            (0..3)
+                .map(|c| (p.0[c] as i32 - q.0[c] as i32).unsigned_abs() as u64)
+                .sum::<u64>()
+        })
         .sum();
     total as f64 / (a.width() * a.height() * 3) as f64
 }
@@ -42,20 +46,32 @@ fn every_scene_renders_off_screen_and_shows_cloth() {
         for _ in 0..45 {
             scene.step_frame().unwrap();
         }
-        kiss3d::pollster::block_on(renderer.render(&scene)).save(&path).unwrap();
+        kiss3d::pollster::block_on(renderer.render(&scene))
+            .save(&path)
+            .unwrap();
         // Read back from the file, as a user would.
         let img = image::open(&path).unwrap().to_rgb8();
         assert_eq!((img.width(), img.height()), (w, h));
         let cloth = cloth_pixels(&img);
         let share = cloth as f64 / (w * h) as f64;
-        assert!(share > 0.01, "{}: only {:.2}% of the picture is cloth-coloured", kind.name(), 100.0 * share);
+        assert!(
+            share > 0.01,
+            "{}: only {:.2}% of the picture is cloth-coloured",
+            kind.name(),
+            100.0 * share
+        );
         images.push((kind, img));
     }
     // Different scenes give different pictures.
     for i in 0..images.len() {
         for j in i + 1..images.len() {
             let d = mean_difference(&images[i].1, &images[j].1);
-            assert!(d > 2.0, "{} and {} look the same ({d})", images[i].0.name(), images[j].0.name());
+            assert!(
+                d > 2.0,
+                "{} and {} look the same ({d})",
+                images[i].0.name(),
+                images[j].0.name()
+            );
         }
     }
     // And an empty scene has no cloth colour at all: the check can fail.

@@ -25,7 +25,11 @@ fn a_snapshot_restores_exactly_and_resumes_bit_for_bit() {
             &SceneOptions {
                 n: Some(16),
                 integrator: Some(integrator),
-                substeps: Some(if integrator.is_explicit() { Substeps::Auto } else { Substeps::Fixed(1) }),
+                substeps: Some(if integrator.is_explicit() {
+                    Substeps::Auto
+                } else {
+                    Substeps::Fixed(1)
+                }),
                 ..Default::default()
             },
         )
@@ -35,13 +39,20 @@ fn a_snapshot_restores_exactly_and_resumes_bit_for_bit() {
         }
         let snapshot = serde_json::to_string(&scene.cloth).unwrap();
         let restored: Cloth = serde_json::from_str(&snapshot).unwrap();
-        assert_eq!(restored, scene.cloth, "{integrator}: the snapshot lost something");
+        assert_eq!(
+            restored, scene.cloth,
+            "{integrator}: the snapshot lost something"
+        );
         // Run both on: the uninterrupted one and the one resumed from the snapshot.
         let mut resumed = restored;
         for frame in 0..20 {
             scene.step_frame().unwrap();
             resumed.step(scene.dt, &scene.obstacles).unwrap();
-            assert_eq!(bits(&scene.cloth), bits(&resumed), "{integrator}: frame {frame} differs after resuming");
+            assert_eq!(
+                bits(&scene.cloth),
+                bits(&resumed),
+                "{integrator}: frame {frame} differs after resuming"
+            );
         }
     }
 }
@@ -50,7 +61,14 @@ fn a_snapshot_restores_exactly_and_resumes_bit_for_bit() {
 fn the_same_inputs_give_bit_identical_results() {
     for kind in [SceneKind::Box, SceneKind::Flag, SceneKind::Hammock] {
         let run = || {
-            let mut scene = Scene::build(kind, &SceneOptions { n: Some(16), ..Default::default() }).unwrap();
+            let mut scene = Scene::build(
+                kind,
+                &SceneOptions {
+                    n: Some(16),
+                    ..Default::default()
+                },
+            )
+            .unwrap();
             for _ in 0..40 {
                 scene.step_frame().unwrap();
             }
@@ -63,18 +81,26 @@ fn the_same_inputs_give_bit_identical_results() {
 fn shape_strategy() -> impl Strategy<Value = SharedShape> {
     prop_oneof![
         (0.05f32..0.6).prop_map(SharedShape::ball),
-        (0.05f32..0.5, 0.05f32..0.5, 0.05f32..0.5).prop_map(|(x, y, z)| SharedShape::cuboid(x, y, z)),
+        (0.05f32..0.5, 0.05f32..0.5, 0.05f32..0.5)
+            .prop_map(|(x, y, z)| SharedShape::cuboid(x, y, z)),
         (0.05f32..0.4, 0.05f32..0.3).prop_map(|(h, r)| SharedShape::capsule_y(h, r)),
     ]
 }
 
 fn pose_strategy() -> impl Strategy<Value = Pose> {
-    (-0.5f32..0.5, -0.5f32..0.5, -0.5f32..0.5, -1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0, 0.0f32..6.3).prop_map(
-        |(x, y, z, ax, ay, az, angle)| {
+    (
+        -0.5f32..0.5,
+        -0.5f32..0.5,
+        -0.5f32..0.5,
+        -1.0f32..1.0,
+        -1.0f32..1.0,
+        -1.0f32..1.0,
+        0.0f32..6.3,
+    )
+        .prop_map(|(x, y, z, ax, ay, az, angle)| {
             let axis = Vector::new(ax, ay, az).normalize_or(Vector::Y);
             Pose::from_parts(Vector::new(x, y, z), Rotation::from_axis_angle(axis, angle))
-        },
-    )
+        })
 }
 
 proptest! {

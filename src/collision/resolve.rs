@@ -128,6 +128,15 @@ impl Collider {
         }
     }
 
+    /// Records that a solver's contact constraint pushed particle `i` out
+    /// along the normal by `distance` metres' worth of velocity this substep
+    /// (speed × substep), so friction afterwards knows the normal impulse.
+    pub fn add_normal_push(&mut self, i: usize, distance: f32) {
+        if let Some(p) = self.pushed.get_mut(i) {
+            *p += distance;
+        }
+    }
+
     /// Records momentum `j` (N·s) handed to obstacle `o` at `point` by a solver.
     pub fn add_impulse(&mut self, o: usize, point: Vector, j: Vector) {
         if let Some(imp) = self.impulses.get_mut(o) {
@@ -221,7 +230,13 @@ impl Collider {
     /// obstacle, without moving anything. Solvers that treat contacts as
     /// constraints call it at the start of a substep, so their result depends
     /// only on the current state.
-    pub fn detect_contacts(&mut self, x: &[Vector], inv_mass: &[f32], obstacles: &[Obstacle], thickness: f32) {
+    pub fn detect_contacts(
+        &mut self,
+        x: &[Vector],
+        inv_mass: &[f32],
+        obstacles: &[Obstacle],
+        thickness: f32,
+    ) {
         for i in 0..x.len() {
             self.touching[i] = false;
             if obstacles.is_empty() || inv_mass[i] == 0.0 {
@@ -319,6 +334,8 @@ impl Collider {
                     contacts += 1;
                 }
             }
+            // A solver's push counts for this substep only.
+            self.pushed[i] = 0.0;
         }
         if edges {
             for kind in [SpringKind::Stretch, SpringKind::Shear] {

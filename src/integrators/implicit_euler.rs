@@ -217,8 +217,11 @@ pub(crate) fn step(
         );
         for i in 0..n {
             if let Filter::Plane(nrm) = st.filter[i] {
-                let reaction = nrm * nrm.dot(st.q[i] - st.b[i]);
+                let push = nrm.dot(st.q[i] - st.b[i]);
+                let reaction = nrm * push;
                 contacts.add_impulse(contacts.contact_obstacle[i] as usize, x[i], -reaction);
+                // The surface's push bounds the friction applied after the solve.
+                contacts.add_normal_push(i, push.max(0.0) / model.mass[i] * h);
             }
             acc[i] += st.dv[i];
         }

@@ -206,7 +206,7 @@ pub(crate) fn substep(
                 params.newton_iterations,
                 params.cg_max_iterations,
                 params.cg_tolerance,
-            ))
+            ));
         }
         Integrator::FastMassSpring => {
             let contacts = fast_mass_spring::Contacts {

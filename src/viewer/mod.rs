@@ -154,7 +154,9 @@ fn obstacle_node(group: &mut SceneNode3d, o: &Obstacle) -> Option<SceneNode3d> {
 /// A camera that frames each scene.
 pub fn camera_for(kind: SceneKind) -> OrbitCamera3d {
     let (eye, at) = match kind {
-        SceneKind::Drape | SceneKind::Box => (Vec3::new(0.7, 0.65, 0.95), Vec3::new(0.0, 0.05, 0.0)),
+        SceneKind::Drape | SceneKind::Box => {
+            (Vec3::new(0.7, 0.65, 0.95), Vec3::new(0.0, 0.05, 0.0))
+        }
         SceneKind::Flag => (Vec3::new(2.4, 1.6, 1.9), Vec3::new(0.6, 1.1, 0.2)),
         SceneKind::Pins => (Vec3::new(0.8, 0.9, 1.1), Vec3::new(0.0, 0.25, 0.0)),
         SceneKind::Curtain => (Vec3::new(1.5, 1.2, 1.3), Vec3::new(0.0, 1.0, 0.1)),
@@ -184,7 +186,13 @@ pub fn draw_trace(window: &mut Window, cloth: &Cloth, mode: TraceMode) {
                 let (Some(sp), Some(strain)) = (springs.get(s), cloth.strain(s)) else {
                     continue;
                 };
-                window.draw_line(x[sp.a as usize], x[sp.b as usize], strain_color(strain), 1.5, false);
+                window.draw_line(
+                    x[sp.a as usize],
+                    x[sp.b as usize],
+                    strain_color(strain),
+                    1.5,
+                    false,
+                );
             }
         }
     }
@@ -283,9 +291,13 @@ impl OffscreenRenderer {
         );
         let width = self.surface.width();
         let text_scale = (width as f32 / 36.0).clamp(12.0, 40.0);
-        self.surface
-            .window_mut()
-            .draw_text(&label, Vec2::new(12.0, 12.0), text_scale, &Font::default(), WHITE);
+        self.surface.window_mut().draw_text(
+            &label,
+            Vec2::new(12.0, 12.0),
+            text_scale,
+            &Font::default(),
+            WHITE,
+        );
         self.surface.render_3d(&mut root, &mut camera).await;
         let snap = self.surface.snap_image();
         view.remove();
@@ -308,7 +320,9 @@ pub async fn screenshot(
     }
     let mut renderer = OffscreenRenderer::new(size.0, size.1).await;
     let image = renderer.render(&scene).await;
-    image.save(path).map_err(|e| format!("cannot write {}: {e}", path.display()))
+    image
+        .save(path)
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 
 /// A key light and a fill light.
