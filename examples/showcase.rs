@@ -165,7 +165,7 @@ fn next_in<T: Copy + PartialEq>(all: &[T], current: T) -> T {
 }
 
 async fn interactive(args: Args) {
-    let mut window = Window::new("cloth3d showcase").await;
+    let mut window = Window::new_with_size("cloth3d showcase", 1280, 720).await;
     window.set_background_color(viewer::BACKGROUND);
     let mut root = SceneNode3d::empty();
     viewer::add_lights(&mut root);
@@ -396,19 +396,19 @@ fn overlay_text(window: &mut Window, font: &std::sync::Arc<Font>, app: &Showcase
     for (k, line) in lines.iter().enumerate() {
         window.draw_text(
             line,
-            Vec2::new(12.0, 10.0 + 34.0 * k as f32),
-            30.0,
+            Vec2::new(12.0, 8.0 + 24.0 * k as f32),
+            20.0,
             font,
             WHITE,
         );
     }
     if app.help {
         let help = "1-6 scene  I integrator  M material  P pins  Space pause  N step  R reset  W wind  T trace  click select  X pin  Ctrl+drag pull  H help";
-        let y = window.size()[1] as f32 * window.scale_factor() as f32 - 44.0;
+        let y = window.size()[1] as f32 * window.scale_factor() as f32 - 30.0;
         window.draw_text(
             help,
             Vec2::new(12.0, y),
-            28.0,
+            18.0,
             font,
             Color::new(0.8, 0.8, 0.85, 1.0),
         );
@@ -421,7 +421,7 @@ fn controls(window: &mut Window, app: &mut Showcase) {
     let mut dt = app.scene.dt;
     window.draw_ui(|ctx| {
         egui::Window::new("controls")
-            .default_pos([10.0, 160.0])
+            .default_pos([10.0, 110.0])
             .show(ctx, |ui| {
                 for kind in SpringKind::ALL {
                     let p = cloth.material.params_mut(kind);

@@ -63,3 +63,8 @@ pub mod prelude {
     pub use crate::math::{Pose, Rotation, Vector};
     pub use crate::pipeline::StepReport;
 }
+
+/// The README's code, compiled and run as doctests so it stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
