@@ -68,7 +68,11 @@ impl PinPreset {
     }
 
     /// The `(row, column)` cells pinned on a `cols × rows` grid.
+    /// Empty for an empty grid.
     pub fn cells(self, cols: usize, rows: usize) -> Vec<(usize, usize)> {
+        if cols == 0 || rows == 0 {
+            return Vec::new();
+        }
         let (lc, lr) = (cols - 1, rows - 1);
         let (cc, cr) = (cols / 2, rows / 2);
         match self {
