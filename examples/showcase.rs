@@ -462,7 +462,13 @@ fn controls(window: &mut Window, app: &mut Showcase) {
                     .z
                     .atan2(cloth.params.wind.direction.x);
                 if ui
-                    .add(egui::Slider::new(&mut heading, -std::f32::consts::PI..=std::f32::consts::PI).text("wind heading (rad)"))
+                    .add(
+                        egui::Slider::new(
+                            &mut heading,
+                            -std::f32::consts::PI..=std::f32::consts::PI,
+                        )
+                        .text("wind heading (rad)"),
+                    )
                     .changed()
                 {
                     cloth.params.wind.direction = Vector::new(heading.cos(), 0.0, heading.sin());

@@ -22,7 +22,10 @@ fn presets_pin_the_figures_of_the_scenes() {
         .iter()
         .all(|&(_, c)| c == 0));
     assert_eq!(PinPreset::CurtainRow.cells(40, 40).len(), 40);
-    assert!(PinPreset::FourCorners.cells(0, 5).is_empty(), "no panic on an empty grid");
+    assert!(
+        PinPreset::FourCorners.cells(0, 5).is_empty(),
+        "no panic on an empty grid"
+    );
     for p in PinPreset::ALL {
         assert_eq!(PinPreset::from_name(p.name()).unwrap(), p);
     }

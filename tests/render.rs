@@ -86,7 +86,10 @@ fn picking_finds_the_nearest_particle_along_the_mouse_ray() {
     // Looking straight down at the particle at (row 1, column 3): x = 0.25, z = -0.25.
     let origin = cloth3d::math::Vector::new(0.25, 2.0, -0.25);
     let down = cloth3d::math::Vector::new(0.0, -1.0, 0.0);
-    assert_eq!(viewer::pick(&cloth, origin, down, 0.02), Some(cloth.index(1, 3).unwrap()));
+    assert_eq!(
+        viewer::pick(&cloth, origin, down, 0.02),
+        Some(cloth.index(1, 3).unwrap())
+    );
     // A ray between particles, or looking away, picks nothing.
     let between = cloth3d::math::Vector::new(0.125, 2.0, -0.125);
     assert_eq!(viewer::pick(&cloth, between, down, 0.02), None);

@@ -46,6 +46,8 @@ pub(crate) struct Collider {
     /// and the outward normal there.
     nearest: Vec<u32>,
     normal: Vec<Vector>,
+    /// Per particle: distance to that obstacle after resolution (m).
+    distance: Vec<f32>,
     reach: f32,
     /// Momentum handed to each obstacle during the current step.
     pub impulses: Vec<ObstacleImpulse>,
@@ -95,6 +97,7 @@ impl Collider {
         }
         self.nearest.resize(particles, NONE);
         self.normal.resize(particles, Vector::ZERO);
+        self.distance.resize(particles, f32::INFINITY);
         self.touching.resize(particles, false);
         self.contact_obstacle.resize(particles, NONE);
         self.contact_immovable.resize(particles, false);
@@ -123,6 +126,21 @@ impl Collider {
                     .iter()
                     .enumerate()
                     .filter(|(_, b)| b.contains_local_point(point))
+                    .map(|(o, _)| o as u32),
+            ),
+        }
+    }
+
+    /// Obstacle candidates whose bounds meet `region`, into `self.candidates`.
+    fn gather_box(&mut self, region: Aabb) {
+        self.candidates.clear();
+        match &self.bvh {
+            Some(bvh) => self.candidates.extend(bvh.intersect_aabb(&region)),
+            None => self.candidates.extend(
+                self.aabbs
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, b)| b.intersects(&region))
                     .map(|(o, _)| o as u32),
             ),
         }
@@ -324,6 +342,12 @@ impl Collider {
                     nearest_distance = contact.signed_distance;
                     self.nearest[i] = o as u32;
                     self.normal[i] = contact.normal;
+                    // Resolution below leaves a particle at least the thickness out.
+                    self.distance[i] = if particles.inv_mass[i] != 0.0 {
+                        contact.signed_distance.max(thickness)
+                    } else {
+                        contact.signed_distance
+                    };
                 }
                 // A hair of slack keeps particles a solver left exactly at the
                 // thickness in contact, so friction still acts on them.
@@ -347,6 +371,23 @@ impl Collider {
                     }
                     // Both ends on one smooth stretch of the same surface: nothing to cut.
                     if oa == ob && self.normal[a].dot(self.normal[b]) > SMOOTH_COS {
+                        continue;
+                    }
+                    // Distance to a surface changes no faster than along the
+                    // spring, so no point of it comes closer than
+                    // (d_a + d_b - length) / 2.
+                    let da = if oa == NONE {
+                        self.reach
+                    } else {
+                        self.distance[a]
+                    };
+                    let db = if ob == NONE {
+                        self.reach
+                    } else {
+                        self.distance[b]
+                    };
+                    let length = (particles.x[b] - particles.x[a]).length();
+                    if 0.5 * (da + db - length) >= 0.5 * thickness {
                         continue;
                     }
                     self.resolve_spring(particles, a, b, obstacles, 0.5 * thickness);
@@ -415,14 +456,32 @@ impl Collider {
         if wa == 0.0 && wb == 0.0 {
             return;
         }
-        for t in EDGE_SAMPLES {
-            let sample = p.x[a] * (1.0 - t) + p.x[b] * t;
-            self.gather(sample);
-            for c in 0..self.candidates.len() {
-                let o = self.candidates[c] as usize;
-                let obstacle = &obstacles[o];
-                let pose = &self.poses[o];
-                let Some(contact) = contact(&*obstacle.shape, pose, sample) else {
+        // Candidates near the whole spring, once.
+        let (xa, xb) = (p.x[a], p.x[b]);
+        self.gather_box(Aabb::new(xa.min(xb), xa.max(xb)));
+        for c in 0..self.candidates.len() {
+            let o = self.candidates[c] as usize;
+            let obstacle = &obstacles[o];
+            let pose = self.poses[o];
+            // A ball: the one point of the spring nearest its centre.
+            // Other shapes: the samples at 1/4, 1/2 and 3/4.
+            let nearest_to_centre;
+            let samples: &[f32] = match obstacle.shape.as_ball() {
+                Some(_) => {
+                    let (ab, ac) = (p.x[b] - p.x[a], pose.translation - p.x[a]);
+                    let len2 = ab.length_squared();
+                    nearest_to_centre = [if len2 > 0.0 {
+                        (ac.dot(ab) / len2).clamp(0.0, 1.0)
+                    } else {
+                        0.5
+                    }];
+                    &nearest_to_centre
+                }
+                None => &EDGE_SAMPLES,
+            };
+            for &t in samples {
+                let sample = p.x[a] * (1.0 - t) + p.x[b] * t;
+                let Some(contact) = contact(&*obstacle.shape, &pose, sample) else {
                     continue;
                 };
                 if contact.signed_distance >= margin {
