@@ -25,6 +25,7 @@
 // Numeric kernels index several structure-of-arrays buffers with one index.
 #![allow(clippy::needless_range_loop)]
 
+pub mod bench;
 pub mod cloth;
 pub mod collision;
 pub mod error;

@@ -26,6 +26,36 @@ enum Command {
     Run(RunArgs),
     /// List the scenes, variants, integrators and materials.
     List,
+    /// Time the scenes at several sizes, against rapier's built-in soft-body cloth.
+    Bench(BenchArgs),
+}
+
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// Scenes to time (repeatable; rapier's cloth is compared on `drape`).
+    #[arg(long, value_parser = parse_scene, default_values = ["drape"])]
+    scene: Vec<SceneKind>,
+    /// Particles along a row (repeatable).
+    #[arg(long, value_parser = parse_n, default_values = ["32", "64", "128", "256"], allow_hyphen_values = true)]
+    n: Vec<usize>,
+    /// Integrators (repeatable).
+    #[arg(long, value_parser = parse_integrator, default_values = ["symplectic-euler", "implicit-euler", "fast-mass-spring"])]
+    integrator: Vec<Integrator>,
+    /// Frames run before timing (the cloth lands on the obstacle).
+    #[arg(long, value_parser = parse_count, default_value = "30", allow_hyphen_values = true)]
+    warmup: u32,
+    /// Frames timed (the median is reported).
+    #[arg(long, value_parser = parse_frames, default_value = "10", allow_hyphen_values = true)]
+    frames: u32,
+    /// Threads (only 1 until the parallel step lands).
+    #[arg(long, value_parser = parse_frames, default_value = "1", allow_hyphen_values = true)]
+    threads: u32,
+    /// Skip rapier's built-in cloth.
+    #[arg(long)]
+    no_rapier: bool,
+    /// One JSON object per line instead of a table.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(clap::Args)]
@@ -124,6 +154,9 @@ fn parse_iterations(s: &str) -> Result<u32, String> {
         Err("iterations must be at least 1".into())
     }
 }
+fn parse_count(s: &str) -> Result<u32, String> {
+    parse_number(s, "a whole number")
+}
 fn parse_frames(s: &str) -> Result<u32, String> {
     let f: u32 = parse_number(s, "a whole number")?;
     if f >= 1 {
@@ -156,6 +189,7 @@ fn main() -> ExitCode {
             ExitCode::SUCCESS
         }
         Command::Run(args) => run_command(args),
+        Command::Bench(args) => bench_command(args),
     }
 }
 
@@ -287,6 +321,88 @@ fn run_command(args: RunArgs) -> ExitCode {
             ExitCode::from(1)
         }
     }
+}
+
+/// The fast mass-spring solver's sparse Cholesky factor grows too large above this N.
+const FMS_MAX_N: usize = 128;
+
+fn bench_command(args: BenchArgs) -> ExitCode {
+    use cloth3d::bench::{bench_cloth3d, bench_rapier_drape, BenchRow};
+    if args.threads != 1 {
+        eprintln!(
+            "error: --threads {}: the step is single-threaded for now; use --threads 1",
+            args.threads
+        );
+        return ExitCode::from(2);
+    }
+    if !args.json {
+        emit(&format!(
+            "{:<8} {:>5} {:<18} {:>8} {:>11} {:>14} {:>14} {:>9} {:>9} {:>9}\n",
+            "scene",
+            "n",
+            "integrator",
+            "substeps",
+            "ms/frame",
+            "part.sub/s",
+            "springs/s",
+            "stretch",
+            "penetr.",
+            "vs rapier"
+        ));
+    }
+    let print = |row: &BenchRow| {
+        if args.json {
+            emit(&format!(
+                "{}\n",
+                serde_json::to_string(row).unwrap_or_default()
+            ));
+        } else {
+            emit(&format!(
+                "{:<8} {:>5} {:<18} {:>8} {:>11.2} {:>14.3e} {:>14} {:>8.2}% {:>8.4} {:>9}\n",
+                row.scene,
+                row.n,
+                row.integrator,
+                row.substeps,
+                1000.0 * row.frame_wall_s,
+                row.particle_substeps_per_s,
+                row.spring_evals_per_s
+                    .map(|s| format!("{s:.3e}"))
+                    .unwrap_or_else(|| "-".into()),
+                100.0 * row.max_stretch,
+                row.max_penetration,
+                row.speedup_vs_rapier
+                    .map(|s| format!("{s:.2}x"))
+                    .unwrap_or_else(|| "-".into()),
+            ));
+        }
+    };
+    for &kind in &args.scene {
+        for &n in &args.n {
+            let rapier = (kind == SceneKind::Drape && !args.no_rapier)
+                .then(|| bench_rapier_drape(n, args.warmup, args.frames));
+            if let Some(row) = &rapier {
+                print(row);
+            }
+            for &integrator in &args.integrator {
+                if integrator == Integrator::FastMassSpring && n > FMS_MAX_N {
+                    if !args.json {
+                        emit(&format!("{:<8} {n:>5} {:<18} skipped: the Cholesky factor above N = {FMS_MAX_N} is too large\n", kind.name(), integrator.name()));
+                    }
+                    continue;
+                }
+                match bench_cloth3d(kind, n, integrator, args.warmup, args.frames) {
+                    Ok(mut row) => {
+                        row.speedup_vs_rapier = rapier
+                            .as_ref()
+                            .map(|r| r.frame_wall_s / row.frame_wall_s.max(1e-12));
+                        print(&row);
+                    }
+                    Err(e) => eprintln!("{} N={n} {}: {e}", kind.name(), integrator.name()),
+                }
+            }
+        }
+    }
+    ExitCode::SUCCESS
 }
 
 fn print_table(m: &RunMetrics) {

@@ -1,0 +1,176 @@
+//! Benchmarks on the canonical scenes, against rapier's built-in soft-body
+//! cloth in the same process: what `cloth3d bench` prints.
+
+use std::time::Instant;
+
+use rapier3d::prelude::{
+    ColliderBuilder, PhysicsWorld, RigidBodyBuilder, SoftBodyBuilder, SoftBodyEdgeKind,
+    SpringCoefficients,
+};
+use serde::{Deserialize, Serialize};
+
+use crate::error::ClothError;
+use crate::integrators::Integrator;
+use crate::math::Vector;
+use crate::scenes::{Scene, SceneKind, SceneOptions, CLOTH_MASS, FRAME_DT};
+
+/// One line of the benchmark.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BenchRow {
+    /// Scene name.
+    pub scene: String,
+    /// Particles along a row.
+    pub n: usize,
+    /// `cloth3d` or `rapier-softbody`.
+    pub engine: String,
+    /// Integrator (`rapier-softbody` for rapier's solver).
+    pub integrator: String,
+    /// Threads used.
+    pub threads: usize,
+    /// Substeps per frame.
+    pub substeps: u32,
+    /// Median wall time of one frame, in seconds.
+    pub frame_wall_s: f64,
+    /// Particles × substeps per second.
+    pub particle_substeps_per_s: f64,
+    /// Spring evaluations per second (explicit integrators: springs × substeps × force evaluations).
+    pub spring_evals_per_s: Option<f64>,
+    /// Largest stretch-spring strain at the end.
+    pub max_stretch: f32,
+    /// Deepest particle inside an obstacle at the end, in metres.
+    pub max_penetration: f32,
+    /// rapier's frame time over this one's at the same N (cloth3d rows).
+    pub speedup_vs_rapier: Option<f64>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// Runs `warmup + frames` frames of a cloth3d scene and times the last `frames`.
+pub fn bench_cloth3d(
+    kind: SceneKind,
+    n: usize,
+    integrator: Integrator,
+    warmup: u32,
+    frames: u32,
+) -> Result<BenchRow, ClothError> {
+    let mut scene = Scene::build(
+        kind,
+        &SceneOptions {
+            n: Some(n),
+            integrator: Some(integrator),
+            substeps: Some(if integrator.is_explicit() {
+                crate::cloth::Substeps::Auto
+            } else {
+                crate::cloth::Substeps::Fixed(1)
+            }),
+            ..Default::default()
+        },
+    )?;
+    for _ in 0..warmup {
+        scene.step_frame()?;
+    }
+    let mut times = Vec::with_capacity(frames as usize);
+    let mut substeps = 0;
+    for _ in 0..frames {
+        let start = Instant::now();
+        let report = scene.step_frame()?;
+        times.push(start.elapsed().as_secs_f64());
+        substeps = report.substeps;
+    }
+    let frame = median(times);
+    let particles = scene.cloth.particle_count() as f64;
+    let springs = scene.cloth.springs().len() as f64;
+    let per_s = |x: f64| if frame > 0.0 { x / frame } else { 0.0 };
+    Ok(BenchRow {
+        scene: kind.name().to_string(),
+        n,
+        engine: "cloth3d".into(),
+        integrator: integrator.name().into(),
+        threads: threads(),
+        substeps,
+        frame_wall_s: frame,
+        particle_substeps_per_s: per_s(particles * substeps as f64),
+        spring_evals_per_s: integrator
+            .is_explicit()
+            .then(|| per_s(springs * substeps as f64 * integrator.force_evaluations() as f64)),
+        max_stretch: crate::metrics::max_stretch(&scene.cloth),
+        max_penetration: scene.max_penetration(),
+        speedup_vs_rapier: None,
+    })
+}
+
+/// Threads the step uses.
+pub fn threads() -> usize {
+    1
+}
+
+/// Softness of rapier's cloth in the comparison: its constraints' natural
+/// frequency (Hz) and damping ratio, with 4 solver iterations (rapier's default).
+pub const RAPIER_SOFTNESS: (f32, f32) = (30.0, 1.0);
+
+/// The `drape` scene with rapier's built-in soft-body cloth: an N×N, 1 kg,
+/// 1 × 1 m cloth at y = 0.6 over a fixed ball of radius 0.3, at 1/60 s.
+pub fn bench_rapier_drape(n: usize, warmup: u32, frames: u32) -> BenchRow {
+    let mut world = PhysicsWorld::new();
+    world.integration_parameters.dt = FRAME_DT;
+    world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::ball(0.3));
+    let spacing = 1.0 / (n - 1) as f32;
+    let builder = SoftBodyBuilder::cloth(
+        Vector::new(-0.5, 0.6, -0.5),
+        Vector::new(spacing, 0.0, 0.0),
+        Vector::new(0.0, 0.0, spacing),
+        n,
+        n,
+    )
+    .particle_mass(CLOTH_MASS / (n * n) as f32)
+    .softness(SpringCoefficients::new(
+        RAPIER_SOFTNESS.0,
+        RAPIER_SOFTNESS.1,
+    ));
+    let handle = world.insert_soft_body(builder);
+    for _ in 0..warmup {
+        world.step();
+    }
+    let mut times = Vec::with_capacity(frames as usize);
+    for _ in 0..frames {
+        let start = Instant::now();
+        world.step();
+        times.push(start.elapsed().as_secs_f64());
+    }
+    let frame = median(times);
+    let (mut stretch, mut penetration) = (0.0f32, 0.0f32);
+    if let Some(body) = world.soft_bodies.get(handle) {
+        let x: Vec<Vector> = body.particle_positions().collect();
+        for e in body.edges() {
+            let [a, b] = e.vertices.map(|i| i as usize);
+            let straight = e.rest_length < 1.01 * spacing;
+            if e.kind == SoftBodyEdgeKind::Structural && straight {
+                stretch = stretch.max((x[b] - x[a]).length() / e.rest_length - 1.0);
+            }
+        }
+        for p in &x {
+            penetration = penetration.max(0.3 - p.length());
+        }
+    }
+    BenchRow {
+        scene: "drape".into(),
+        n,
+        engine: "rapier-softbody".into(),
+        integrator: "rapier-softbody".into(),
+        threads: 1,
+        substeps: world.integration_parameters.num_solver_iterations as u32,
+        frame_wall_s: frame,
+        particle_substeps_per_s: if frame > 0.0 {
+            (n * n) as f64 / frame
+        } else {
+            0.0
+        },
+        spring_evals_per_s: None,
+        max_stretch: stretch,
+        max_penetration: penetration.max(0.0),
+        speedup_vs_rapier: None,
+    }
+}
