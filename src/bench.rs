@@ -102,9 +102,16 @@ pub fn bench_cloth3d(
     })
 }
 
-/// Threads the step uses.
+/// Threads the step uses: rayon's current pool with the `parallel` feature, else 1.
 pub fn threads() -> usize {
-    1
+    #[cfg(feature = "parallel")]
+    {
+        rayon::current_num_threads()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        1
+    }
 }
 
 /// Softness of rapier's cloth in the comparison: its constraints' natural

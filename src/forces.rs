@@ -48,26 +48,92 @@ pub fn wind_force_on_triangle(p0: Vector, p1: Vector, p2: Vector, wind: &Wind) -
     n * (wind.strength * 0.5 * twice_area * n.dot(dir))
 }
 
+/// Below this many springs a colour class is evaluated on one thread.
+#[cfg(feature = "parallel")]
+const PARALLEL_MIN: usize = 4096;
+
 /// Adds the spring forces (elastic and damping) of every spring into `f`.
+///
+/// Springs are stored colour class by colour class; with `parallel` (and the
+/// `parallel` feature) each large class is split across threads. A particle
+/// meets each class at most once, so it sums its forces in storage order
+/// either way: the result is bit-identical to the single-threaded one.
 pub(crate) fn add_spring_forces(
     springs: &Springs,
     params: &[SpringParams; 3],
     x: &[Vector],
     v: &[Vector],
     f: &mut [Vector],
+    parallel: bool,
 ) {
     let (a, b, rest) = (&springs.a[..], &springs.b[..], &springs.rest[..]);
-    for kind in SpringKind::ALL {
-        let p = params[kind.index()];
-        let range = springs.range(kind);
-        let (a, b, rest) = (&a[range.clone()], &b[range.clone()], &rest[range]);
-        for s in 0..a.len() {
+    let serial = |range: std::ops::Range<usize>, p: SpringParams, f: &mut [Vector]| {
+        for s in range {
             let (i, j) = (a[s] as usize, b[s] as usize);
             let force = spring_force(x[i], x[j], v[i], v[j], rest[s], p);
             f[i] += force;
             f[j] -= force;
         }
+    };
+    if !parallel || springs.colour_ranges.is_empty() {
+        for kind in SpringKind::ALL {
+            serial(springs.range(kind), params[kind.index()], f);
+        }
+        return;
     }
+    for (range, &disjoint) in springs.colour_ranges.iter().zip(&springs.colour_disjoint) {
+        let p = params[springs.kind(range.start).index()];
+        #[cfg(feature = "parallel")]
+        if disjoint && range.len() >= PARALLEL_MIN {
+            parallel_class(a, b, rest, range.clone(), p, x, v, f);
+            continue;
+        }
+        let _ = disjoint;
+        serial(range.clone(), p, f);
+    }
+}
+
+/// A pointer to the force buffer that threads may share because they write
+/// disjoint elements.
+#[cfg(feature = "parallel")]
+#[derive(Clone, Copy)]
+struct SharedForces(*mut Vector);
+#[cfg(feature = "parallel")]
+// SAFETY: only used by `parallel_class`, whose threads write disjoint elements.
+unsafe impl Send for SharedForces {}
+#[cfg(feature = "parallel")]
+// SAFETY: as above.
+unsafe impl Sync for SharedForces {}
+
+#[cfg(feature = "parallel")]
+#[allow(clippy::too_many_arguments)]
+fn parallel_class(
+    a: &[u32],
+    b: &[u32],
+    rest: &[f32],
+    range: std::ops::Range<usize>,
+    p: SpringParams,
+    x: &[Vector],
+    v: &[Vector],
+    f: &mut [Vector],
+) {
+    use rayon::prelude::*;
+    let n = f.len();
+    let out = SharedForces(f.as_mut_ptr());
+    range.into_par_iter().with_min_len(1024).for_each(move |s| {
+        let out = out;
+        let (i, j) = (a[s] as usize, b[s] as usize);
+        let force = spring_force(x[i], x[j], v[i], v[j], rest[s], p);
+        if i < n && j < n {
+            // SAFETY: `i` and `j` are in bounds (checked above and validated when
+            // the cloth was built), and within one colour class no two springs
+            // share a particle, so no other thread touches f[i] or f[j] now.
+            unsafe {
+                *out.0.add(i) += force;
+                *out.0.add(j) -= force;
+            }
+        }
+    });
 }
 
 /// Adds the wind force of every triangle into `f`.
@@ -94,6 +160,7 @@ pub(crate) struct ForceModel<'a> {
     pub gravity: Vector,
     pub air_drag: f32,
     pub wind: Wind,
+    pub parallel: bool,
 }
 
 impl<'a> ForceModel<'a> {
@@ -102,7 +169,7 @@ impl<'a> ForceModel<'a> {
         for i in 0..f.len() {
             f[i] = (self.gravity - v[i] * self.air_drag) * self.mass[i];
         }
-        add_spring_forces(self.springs, &self.spring_params, x, v, f);
+        add_spring_forces(self.springs, &self.spring_params, x, v, f, self.parallel);
         add_wind_forces(self.triangles, &self.wind, x, f);
     }
 
@@ -138,6 +205,7 @@ impl Cloth {
             gravity: self.params.gravity,
             air_drag: self.params.air_drag,
             wind: self.params.wind,
+            parallel: self.params.parallel,
         };
         model.forces(&self.particles.x, &self.particles.v, f);
     }

@@ -327,14 +327,34 @@ fn run_command(args: RunArgs) -> ExitCode {
 const FMS_MAX_N: usize = 128;
 
 fn bench_command(args: BenchArgs) -> ExitCode {
-    use cloth3d::bench::{bench_cloth3d, bench_rapier_drape, BenchRow};
+    #[cfg(not(feature = "parallel"))]
     if args.threads != 1 {
         eprintln!(
-            "error: --threads {}: the step is single-threaded for now; use --threads 1",
+            "error: --threads {}: this build is single-threaded; build with --features parallel",
             args.threads
         );
         return ExitCode::from(2);
     }
+    #[cfg(feature = "parallel")]
+    {
+        let pool = match rayon::ThreadPoolBuilder::new()
+            .num_threads(args.threads as usize)
+            .build()
+        {
+            Ok(pool) => pool,
+            Err(e) => {
+                eprintln!("error: cannot start {} threads: {e}", args.threads);
+                return ExitCode::from(2);
+            }
+        };
+        pool.install(|| bench_rows(&args))
+    }
+    #[cfg(not(feature = "parallel"))]
+    bench_rows(&args)
+}
+
+fn bench_rows(args: &BenchArgs) -> ExitCode {
+    use cloth3d::bench::{bench_cloth3d, bench_rapier_drape, BenchRow};
     if !args.json {
         emit(&format!(
             "{:<8} {:>5} {:<18} {:>8} {:>11} {:>14} {:>14} {:>9} {:>9} {:>9}\n",

@@ -140,6 +140,14 @@ pub struct SimulationParams {
     /// Also keep stretch and shear springs (not only particles) out of obstacles,
     /// so cloth cannot cut through edges and corners.
     pub edge_collisions: bool,
+    /// Evaluate spring forces on several threads (with the `parallel` feature;
+    /// ignored without it). The results are bit-identical either way.
+    #[serde(default = "default_true")]
+    pub parallel: bool,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 impl Default for SimulationParams {
@@ -156,6 +164,7 @@ impl Default for SimulationParams {
             cg_tolerance: 1e-4,
             fms_iterations: 10,
             edge_collisions: true,
+            parallel: true,
         }
     }
 }

@@ -55,12 +55,71 @@ pub struct Springs {
     pub(crate) b: Vec<u32>,
     pub(crate) rest: Vec<f32>,
     pub(crate) ranges: [Range<usize>; 3],
+    #[serde(default)]
+    pub(crate) colour_ranges: Vec<Range<usize>>,
+    /// Per colour range: true when no two of its springs share a particle.
+    #[serde(default)]
+    pub(crate) colour_disjoint: Vec<bool>,
+    /// Per kind: the most springs of that kind at any one particle.
+    #[serde(default)]
+    pub(crate) max_degree: [u32; 3],
+}
+
+/// Greedy colouring of the springs, kind by kind: each spring gets the lowest
+/// colour not yet used at either of its particles. Colours past 63 share one
+/// last class, whose springs may share particles (it is run serially).
+fn colour(list: &[Spring]) -> Vec<u32> {
+    /// The colour whose springs may share particles.
+    const OVERFLOW: u32 = 64;
+    let n = list
+        .iter()
+        .map(|s| s.a.max(s.b) as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut colours = vec![0u32; list.len()];
+    for kind in SpringKind::ALL {
+        let mut used = vec![0u64; n];
+        for (s, spring) in list.iter().enumerate().filter(|(_, sp)| sp.kind == kind) {
+            let (a, b) = (spring.a as usize, spring.b as usize);
+            let taken = used[a] | used[b];
+            let c = (!taken).trailing_zeros();
+            if c < 64 {
+                used[a] |= 1 << c;
+                used[b] |= 1 << c;
+                colours[s] = c;
+            } else {
+                colours[s] = OVERFLOW;
+            }
+        }
+    }
+    colours
 }
 
 impl Springs {
     /// Builds the flat arrays from a list of springs (any order).
     pub(crate) fn from_list(mut list: Vec<Spring>) -> Self {
-        list.sort_by_key(|s| s.kind.index());
+        // Colour the springs of each kind so that no two of one colour share a
+        // particle, and store them kind by kind, colour by colour: a colour
+        // class can then be evaluated in parallel, and each particle still sums
+        // its spring forces in the same order as the serial loop.
+        let colours = colour(&list);
+        let mut order: Vec<usize> = (0..list.len()).collect();
+        order.sort_by_key(|&s| (list[s].kind.index(), colours[s]));
+        let sorted_colours: Vec<u32> = order.iter().map(|&s| colours[s]).collect();
+        list = order.iter().map(|&s| list[s]).collect();
+        let mut colour_ranges = Vec::new();
+        let mut colour_disjoint = Vec::new();
+        let mut start = 0;
+        for s in 1..=list.len() {
+            if s == list.len()
+                || list[s].kind != list[start].kind
+                || sorted_colours[s] != sorted_colours[start]
+            {
+                colour_ranges.push(start..s);
+                colour_disjoint.push(sorted_colours[start] < 64);
+                start = s;
+            }
+        }
         let mut ranges: [Range<usize>; 3] = [0..0, 0..0, 0..0];
         for kind in SpringKind::ALL {
             let start = list
@@ -70,12 +129,35 @@ impl Springs {
             let count = list.iter().filter(|s| s.kind == kind).count();
             ranges[kind.index()] = start..start + count;
         }
+        let n = list
+            .iter()
+            .map(|s| s.a.max(s.b) as usize + 1)
+            .max()
+            .unwrap_or(0);
+        let mut max_degree = [0u32; 3];
+        for kind in SpringKind::ALL {
+            let mut degree = vec![0u32; n];
+            for s in list.iter().filter(|s| s.kind == kind) {
+                degree[s.a as usize] += 1;
+                degree[s.b as usize] += 1;
+            }
+            max_degree[kind.index()] = degree.into_iter().max().unwrap_or(0);
+        }
         Self {
+            max_degree,
             a: list.iter().map(|s| s.a).collect(),
             b: list.iter().map(|s| s.b).collect(),
             rest: list.iter().map(|s| s.rest_length).collect(),
             ranges,
+            colour_ranges,
+            colour_disjoint,
         }
+    }
+
+    /// Ranges of springs of one kind and one colour: no two springs of a range
+    /// share a particle.
+    pub fn colour_ranges(&self) -> &[Range<usize>] {
+        &self.colour_ranges
     }
 
     /// Number of springs.

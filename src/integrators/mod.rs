@@ -183,6 +183,7 @@ pub(crate) fn substep(
         gravity: cloth.params.gravity,
         air_drag: cloth.params.air_drag,
         wind: cloth.params.wind,
+        parallel: cloth.params.parallel,
     };
     let (x, v) = (&mut particles.x, &mut particles.v);
     particles.x_prev.copy_from_slice(x);
@@ -229,28 +230,27 @@ pub(crate) fn substep(
 }
 
 /// Upper bounds on the squared highest angular frequency (1/s²) and on the
-/// highest damping rate (1/s) of the cloth, by Gershgorin's theorem over
-/// the springs at each particle.
+/// highest damping rate (1/s) of the cloth, by Gershgorin's theorem: at any
+/// particle, twice the stiffness (damping) of the springs that can meet there
+/// over the lightest free mass. Allocates nothing.
 pub fn stiffness_bounds(cloth: &Cloth) -> (f32, f32) {
-    let p = &cloth.particles;
-    let mut sk = vec![0.0f32; p.len()];
-    let mut sc = vec![0.0f32; p.len()];
+    let max_inv_mass = cloth
+        .particles
+        .inv_mass
+        .iter()
+        .copied()
+        .fold(0.0f32, f32::max);
+    let (mut k, mut c) = (0.0f32, 0.0f32);
     for kind in SpringKind::ALL {
         let sp = cloth.material.params(kind);
-        for s in cloth.springs.range(kind) {
-            for i in [cloth.springs.a[s], cloth.springs.b[s]] {
-                sk[i as usize] += sp.stiffness;
-                sc[i as usize] += sp.damping;
-            }
-        }
+        let degree = cloth.springs.max_degree[kind.index()] as f32;
+        k += sp.stiffness * degree;
+        c += sp.damping * degree;
     }
-    let mut omega2 = 0.0f32;
-    let mut gamma = 0.0f32;
-    for i in 0..p.len() {
-        omega2 = omega2.max(2.0 * sk[i] * p.inv_mass[i]);
-        gamma = gamma.max(2.0 * sc[i] * p.inv_mass[i]);
-    }
-    (omega2, gamma + cloth.params.air_drag)
+    (
+        2.0 * k * max_inv_mass,
+        2.0 * c * max_inv_mass + cloth.params.air_drag,
+    )
 }
 
 /// The largest substep (seconds) at which `integrator` is estimated to be

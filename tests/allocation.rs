@@ -1,0 +1,70 @@
+//! A warmed-up step allocates nothing, for every integrator.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use cloth3d::prelude::*;
+use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards to the system allocator, only counting.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn a_warmed_up_step_allocates_nothing() {
+    for integrator in Integrator::ALL {
+        for kind in [SceneKind::Drape, SceneKind::Flag] {
+            let mut scene = Scene::build(
+                kind,
+                &SceneOptions {
+                    n: Some(12),
+                    integrator: Some(integrator),
+                    substeps: Some(if integrator.is_explicit() {
+                        Substeps::Auto
+                    } else {
+                        Substeps::Fixed(1)
+                    }),
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            // Parallel evaluation would allocate in rayon's machinery.
+            scene.cloth.params.parallel = false;
+            for _ in 0..5 {
+                scene.cloth.step(scene.dt, &scene.obstacles).unwrap();
+            }
+            let before = ALLOCATIONS.load(Ordering::Relaxed);
+            for _ in 0..5 {
+                scene.cloth.step(scene.dt, &scene.obstacles).unwrap();
+            }
+            let allocated = ALLOCATIONS.load(Ordering::Relaxed) - before;
+            assert_eq!(
+                allocated,
+                0,
+                "{integrator} on {}: {allocated} allocations in 5 steps",
+                kind.name()
+            );
+        }
+    }
+}
