@@ -3,8 +3,11 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+mod common;
+
 use cloth3d::prelude::*;
-use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
+use cloth3d::scenes::SceneKind;
+use common::scene_with;
 
 struct Counting;
 
@@ -35,20 +38,7 @@ static GLOBAL: Counting = Counting;
 fn a_warmed_up_step_allocates_nothing() {
     for integrator in Integrator::ALL {
         for kind in [SceneKind::Drape, SceneKind::Flag] {
-            let mut scene = Scene::build(
-                kind,
-                &SceneOptions {
-                    n: Some(12),
-                    integrator: Some(integrator),
-                    substeps: Some(if integrator.is_explicit() {
-                        Substeps::Auto
-                    } else {
-                        Substeps::Fixed(1)
-                    }),
-                    ..Default::default()
-                },
-            )
-            .unwrap();
+            let mut scene = scene_with(kind, 12, integrator);
             // Parallel evaluation would allocate in rayon's machinery.
             scene.cloth.params.parallel = false;
             for _ in 0..5 {

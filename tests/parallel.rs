@@ -1,18 +1,11 @@
 //! The multi-threaded step gives exactly the single-threaded result.
 #![cfg(feature = "parallel")]
 
+mod common;
+
 use cloth3d::prelude::*;
 use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
-
-fn bits(cloth: &Cloth) -> Vec<u32> {
-    cloth
-        .positions()
-        .iter()
-        .chain(cloth.velocities())
-        .flat_map(|v| v.to_array())
-        .map(f32::to_bits)
-        .collect()
-}
+use common::bits;
 
 #[test]
 fn parallel_and_serial_steps_are_bit_identical() {

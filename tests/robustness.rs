@@ -1,39 +1,18 @@
 //! Snapshots, determinism, and properties over random cloths, obstacles and steps.
 
+mod common;
+
 use cloth3d::collision::penetration_depth;
 use cloth3d::prelude::*;
 use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
+use common::{bits, scene_with};
 use parry3d::shape::SharedShape;
 use proptest::prelude::*;
-
-/// Positions and velocities as raw bits, for bit-for-bit comparisons.
-fn bits(cloth: &Cloth) -> Vec<u32> {
-    cloth
-        .positions()
-        .iter()
-        .chain(cloth.velocities())
-        .flat_map(|v| v.to_array())
-        .map(f32::to_bits)
-        .collect()
-}
 
 #[test]
 fn a_snapshot_restores_exactly_and_resumes_bit_for_bit() {
     for integrator in Integrator::ALL {
-        let mut scene = Scene::build(
-            SceneKind::Drape,
-            &SceneOptions {
-                n: Some(16),
-                integrator: Some(integrator),
-                substeps: Some(if integrator.is_explicit() {
-                    Substeps::Auto
-                } else {
-                    Substeps::Fixed(1)
-                }),
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let mut scene = scene_with(SceneKind::Drape, 16, integrator);
         for _ in 0..20 {
             scene.step_frame().unwrap();
         }

@@ -117,18 +117,7 @@ impl Collider {
 
     /// Obstacle candidates whose bounds contain `point`, into `self.candidates`.
     fn gather(&mut self, point: Vector) {
-        self.candidates.clear();
-        let query = Aabb::new(point, point);
-        match &self.bvh {
-            Some(bvh) => self.candidates.extend(bvh.intersect_aabb(&query)),
-            None => self.candidates.extend(
-                self.aabbs
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, b)| b.contains_local_point(point))
-                    .map(|(o, _)| o as u32),
-            ),
-        }
+        self.gather_box(Aabb::new(point, point));
     }
 
     /// Obstacle candidates whose bounds meet `region`, into `self.candidates`.

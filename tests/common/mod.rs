@@ -41,3 +41,37 @@ pub fn oscillator(m: f32, k: f32, c: f32, amplitude: f32, integrator: Integrator
 pub fn displacement(cloth: &Cloth) -> f32 {
     cloth.positions()[1].x - 1.0
 }
+
+/// Positions and velocities as raw bits, for bit-for-bit comparisons.
+pub fn bits(cloth: &Cloth) -> Vec<u32> {
+    cloth
+        .positions()
+        .iter()
+        .chain(cloth.velocities())
+        .flat_map(|v| v.to_array())
+        .map(f32::to_bits)
+        .collect()
+}
+
+/// A canonical scene at `n` particles a row with `integrator`: automatic
+/// substeps for the explicit ones, one step per frame for the implicit ones.
+pub fn scene_with(
+    kind: cloth3d::scenes::SceneKind,
+    n: usize,
+    integrator: Integrator,
+) -> cloth3d::scenes::Scene {
+    cloth3d::scenes::Scene::build(
+        kind,
+        &cloth3d::scenes::SceneOptions {
+            n: Some(n),
+            integrator: Some(integrator),
+            substeps: Some(if integrator.is_explicit() {
+                Substeps::Auto
+            } else {
+                Substeps::Fixed(1)
+            }),
+            ..Default::default()
+        },
+    )
+    .unwrap()
+}
