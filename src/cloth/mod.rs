@@ -503,7 +503,6 @@ impl Cloth {
         finite_vec("position", position)?;
         self.particles.x[i] = position;
         self.particles.x_prev[i] = position;
-        self.workspace.invalidate_history();
         Ok(())
     }
 
@@ -513,14 +512,12 @@ impl Cloth {
         self.check_index(i)?;
         finite_vec("velocity", velocity)?;
         self.particles.v[i] = velocity;
-        self.workspace.invalidate_history();
         Ok(())
     }
 
     /// Sets every velocity to zero.
     pub fn stop(&mut self) {
         self.particles.v.fill(Vector::ZERO);
-        self.workspace.invalidate_history();
     }
 
     /// Changes the mass of particle `i`, in kg.
@@ -555,7 +552,6 @@ impl Cloth {
     /// Switches the integrator; the cloth keeps its state.
     pub fn set_integrator(&mut self, integrator: Integrator) {
         self.params.integrator = integrator;
-        self.workspace.invalidate_history();
     }
 
     /// Length of spring `s` divided by its rest length, minus one.

@@ -132,16 +132,12 @@ impl Workspace {
     /// Drops everything that depends on masses, pins or topology.
     pub(crate) fn invalidate(&mut self) {
         self.fms.invalidate();
-        self.invalidate_history();
     }
 
     /// How many times the fast mass-spring solver computed its Cholesky factor.
     pub(crate) fn factorizations(&self) -> u64 {
         self.fms.factorizations
     }
-
-    /// Drops everything that depends on the previous steps' state.
-    pub(crate) fn invalidate_history(&mut self) {}
 
     /// Makes sure every buffer holds `n` entries.
     pub(crate) fn resize(&mut self, n: usize) {
