@@ -28,6 +28,7 @@
 pub mod bench;
 pub mod cloth;
 pub mod collision;
+pub mod compare;
 pub mod error;
 pub mod forces;
 pub mod integrators;

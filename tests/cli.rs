@@ -140,3 +140,41 @@ fn a_diverging_run_says_so_on_one_line_and_exits_1() {
     );
     assert!(out.stdout.is_empty(), "no NaN figures on stdout");
 }
+
+#[test]
+fn compare_runs_every_integrator_and_writes_a_plot() {
+    let plot = std::env::temp_dir().join(format!("cloth3d-compare-{}.png", std::process::id()));
+    let out = cloth3d(&[
+        "compare",
+        "pins",
+        "--n",
+        "9",
+        "--frames",
+        "30",
+        "--json",
+        "--plot",
+        plot.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let rows: Vec<serde_json::Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(rows.len(), 6, "{stdout}");
+    for row in &rows {
+        assert_eq!(row["stable"], true, "{row}");
+        // Hanging from its centre pin, the cloth lost potential energy.
+        assert!(row["energy_change"].as_f64().unwrap() < 0.0, "{row}");
+    }
+    let img = image::open(&plot).unwrap().to_rgb8();
+    assert_eq!((img.width(), img.height()), (900, 600));
+    // Six coloured lines: many pixels differ from the background.
+    let background = *img.get_pixel(0, 0);
+    assert!(img.pixels().filter(|p| **p != background).count() > 2000);
+    let _ = std::fs::remove_file(&plot);
+}

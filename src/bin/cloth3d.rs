@@ -28,6 +28,30 @@ enum Command {
     List,
     /// Time the scenes at several sizes, against rapier's built-in soft-body cloth.
     Bench(BenchArgs),
+    /// Run every integrator on one scene at the same frame step: a table and a plot.
+    Compare(CompareArgs),
+}
+
+#[derive(clap::Args)]
+struct CompareArgs {
+    /// Scene name.
+    #[arg(value_parser = parse_scene)]
+    scene: SceneKind,
+    /// Particles along a row.
+    #[arg(long, value_parser = parse_n, allow_hyphen_values = true)]
+    n: Option<usize>,
+    /// Frame step in seconds.
+    #[arg(long, value_parser = parse_positive, allow_hyphen_values = true)]
+    dt: Option<f32>,
+    /// Frames to simulate.
+    #[arg(long, value_parser = parse_frames, allow_hyphen_values = true)]
+    frames: Option<u32>,
+    /// Where to write the plot of energy (top) and max stretch (bottom).
+    #[arg(long, default_value = "compare.png")]
+    plot: std::path::PathBuf,
+    /// One JSON object per integrator instead of a table.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(clap::Args)]
@@ -190,6 +214,7 @@ fn main() -> ExitCode {
         }
         Command::Run(args) => run_command(args),
         Command::Bench(args) => bench_command(args),
+        Command::Compare(args) => compare_command(args),
     }
 }
 
@@ -321,6 +346,72 @@ fn run_command(args: RunArgs) -> ExitCode {
             ExitCode::from(1)
         }
     }
+}
+
+fn compare_command(args: CompareArgs) -> ExitCode {
+    use cloth3d::compare::{compare, plot, COLORS};
+    let options = SceneOptions {
+        n: args.n,
+        dt: args.dt,
+        ..Default::default()
+    };
+    let frames = args.frames.unwrap_or(args.scene.default_frames());
+    let rows = match compare(args.scene, &options, frames) {
+        Ok(rows) => rows,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    if let Err(e) = plot(&rows, 900, 600).save(&args.plot) {
+        eprintln!("error: cannot write {}: {e}", args.plot.display());
+        return ExitCode::from(1);
+    }
+    let mut out = String::new();
+    if args.json {
+        for row in &rows {
+            let mut row = row.clone();
+            row.energy.clear();
+            row.stretch.clear();
+            outln!(out, "{}", serde_json::to_string(&row).unwrap_or_default());
+        }
+    } else {
+        outln!(
+            out,
+            "{:<18} {:<8} {:>8} {:>10} {:>10} {:>14} {:>11}  {}",
+            "integrator",
+            "stable",
+            "substeps",
+            "iterations",
+            "stretch",
+            "energy change",
+            "ms/frame",
+            "plot colour"
+        );
+        for (k, row) in rows.iter().enumerate() {
+            let [r, g, b] = COLORS[k % COLORS.len()];
+            outln!(
+                out,
+                "{:<18} {:<8} {:>8} {:>10} {:>9.2}% {:>12.4} J {:>11.2}  #{r:02x}{g:02x}{b:02x}",
+                row.integrator,
+                if row.stable { "yes" } else { "DIVERGED" },
+                row.substeps,
+                row.iterations
+                    .map(|i| i.to_string())
+                    .unwrap_or_else(|| "-".into()),
+                100.0 * row.max_stretch,
+                row.energy_change,
+                1000.0 * row.frame_wall_s,
+            );
+        }
+        outln!(
+            out,
+            "plot: {} (energy on top, max stretch below, against time)",
+            args.plot.display()
+        );
+    }
+    emit(&out);
+    ExitCode::SUCCESS
 }
 
 /// The fast mass-spring solver's sparse Cholesky factor grows too large above this N.
