@@ -269,11 +269,7 @@ async fn interactive(args: Args) {
                         Key::I => {
                             let next = next_in(&Integrator::ALL, app.scene.cloth.params.integrator);
                             app.scene.cloth.set_integrator(next);
-                            app.scene.cloth.params.substeps = if next.is_explicit() {
-                                Substeps::Auto
-                            } else {
-                                Substeps::Fixed(1)
-                            };
+                            app.scene.cloth.params.substeps = next.default_substeps();
                             app.options.integrator = Some(next);
                         }
                         Key::M => {

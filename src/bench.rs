@@ -61,11 +61,7 @@ pub fn bench_cloth3d(
         &SceneOptions {
             n: Some(n),
             integrator: Some(integrator),
-            substeps: Some(if integrator.is_explicit() {
-                crate::cloth::Substeps::Auto
-            } else {
-                crate::cloth::Substeps::Fixed(1)
-            }),
+            substeps: Some(integrator.default_substeps()),
             ..Default::default()
         },
     )?;

@@ -6,7 +6,6 @@ use std::time::Instant;
 use image::{Rgb, RgbImage};
 use serde::{Deserialize, Serialize};
 
-use crate::cloth::Substeps;
 use crate::error::ClothError;
 use crate::integrators::Integrator;
 use crate::scenes::{Scene, SceneKind, SceneOptions};
@@ -48,11 +47,7 @@ pub fn compare(
             kind,
             &SceneOptions {
                 integrator: Some(integrator),
-                substeps: Some(if integrator.is_explicit() {
-                    Substeps::Auto
-                } else {
-                    Substeps::Fixed(1)
-                }),
+                substeps: Some(integrator.default_substeps()),
                 ..options.clone()
             },
         )?;

@@ -80,6 +80,16 @@ impl Integrator {
         !matches!(self, Integrator::ImplicitEuler | Integrator::FastMassSpring)
     }
 
+    /// The substeps this integrator wants by default: automatic (within the
+    /// stability limit) for the explicit ones, one step a frame for the implicit ones.
+    pub fn default_substeps(self) -> crate::cloth::Substeps {
+        if self.is_explicit() {
+            crate::cloth::Substeps::Auto
+        } else {
+            crate::cloth::Substeps::Fixed(1)
+        }
+    }
+
     /// Force evaluations per substep.
     pub fn force_evaluations(self) -> u32 {
         match self {

@@ -65,11 +65,7 @@ pub fn scene_with(
         &cloth3d::scenes::SceneOptions {
             n: Some(n),
             integrator: Some(integrator),
-            substeps: Some(if integrator.is_explicit() {
-                Substeps::Auto
-            } else {
-                Substeps::Fixed(1)
-            }),
+            substeps: Some(integrator.default_substeps()),
             ..Default::default()
         },
     )
