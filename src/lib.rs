@@ -30,6 +30,7 @@ pub mod cloth;
 pub mod collision;
 pub mod compare;
 pub mod error;
+pub mod export;
 pub mod forces;
 pub mod integrators;
 pub mod metrics;

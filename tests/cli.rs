@@ -178,3 +178,57 @@ fn compare_runs_every_integrator_and_writes_a_plot() {
     assert!(img.pixels().filter(|p| **p != background).count() > 2000);
     let _ = std::fs::remove_file(&plot);
 }
+
+#[test]
+fn export_obj_writes_one_mesh_per_frame_that_parses_back() {
+    let dir = std::env::temp_dir().join(format!("cloth3d-obj-{}", std::process::id()));
+    let out = cloth3d(&[
+        "run",
+        "pins",
+        "--n",
+        "6",
+        "--frames",
+        "3",
+        "--json",
+        "--export-obj",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(
+        stdout.trim().lines().count(),
+        1,
+        "JSON mode prints only the object"
+    );
+    let metrics: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    for frame in 1..=3 {
+        let text = std::fs::read_to_string(dir.join(format!("frame_{frame:04}.obj"))).unwrap();
+        let count = |tag: &str| text.lines().filter(|l| l.starts_with(tag)).count();
+        assert_eq!(count("v "), 36);
+        assert_eq!(count("vt "), 36);
+        assert_eq!(count("vn "), 36);
+        assert_eq!(count("f "), 2 * 5 * 5);
+        // Every face index refers to a vertex that exists.
+        for l in text.lines().filter(|l| l.starts_with("f ")) {
+            for corner in l.split_whitespace().skip(1) {
+                let v: usize = corner.split('/').next().unwrap().parse().unwrap();
+                assert!((1..=36).contains(&v), "{l}");
+            }
+        }
+        if frame == 3 {
+            // The last file is the final state: its mean y is the reported centroid.
+            let ys: Vec<f64> = text
+                .lines()
+                .filter(|l| l.starts_with("v "))
+                .map(|l| l.split_whitespace().nth(2).unwrap().parse().unwrap())
+                .collect();
+            let mean = ys.iter().sum::<f64>() / ys.len() as f64;
+            assert!((mean - metrics["centroid"][1].as_f64().unwrap()).abs() < 1e-5);
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

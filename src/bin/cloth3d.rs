@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand};
 
 use cloth3d::cloth::{Material, PinPreset, Substeps};
 use cloth3d::integrators::Integrator;
-use cloth3d::metrics::{run, RunMetrics};
+use cloth3d::metrics::{run_with, RunMetrics};
 use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
 
 #[derive(Parser)]
@@ -120,6 +120,9 @@ struct RunArgs {
     /// Relative residual at which conjugate gradient stops (implicit-euler).
     #[arg(long, value_parser = parse_positive, allow_hyphen_values = true)]
     cg_tolerance: Option<f32>,
+    /// Write the cloth of every frame as DIR/frame_0001.obj, ... (Blender's OBJ sequence import).
+    #[arg(long, value_name = "DIR")]
+    export_obj: Option<std::path::PathBuf>,
     /// Local/global iterations per substep (fast-mass-spring).
     #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
     fms_iterations: Option<u32>,
@@ -326,7 +329,26 @@ fn run_command(args: RunArgs) -> ExitCode {
         params.fms_iterations = it;
     }
     let frames = scene.frames;
-    match run(&mut scene, frames) {
+    if let Some(dir) = &args.export_obj {
+        if let Err(e) = std::fs::create_dir_all(dir) {
+            eprintln!("error: cannot create {}: {e}", dir.display());
+            return ExitCode::from(2);
+        }
+    }
+    let mut export_error = None;
+    let result = run_with(&mut scene, frames, |scene, frame| {
+        if let (Some(dir), None) = (&args.export_obj, &export_error) {
+            let path = dir.join(format!("frame_{:04}.obj", frame + 1));
+            if let Err(e) = cloth3d::export::write_obj(&scene.cloth, &path) {
+                export_error = Some(format!("cannot write {}: {e}", path.display()));
+            }
+        }
+    });
+    if let Some(e) = export_error {
+        eprintln!("error: {e}");
+        return ExitCode::from(1);
+    }
+    match result {
         Ok(m) => {
             if args.json {
                 match serde_json::to_string(&m) {
