@@ -445,3 +445,37 @@ fn many_small_balls_hold_the_cloth_through_the_bounding_volume_tree() {
     let c = cloth.centroid();
     assert!(c.y > -0.1 && c.y < 0.05, "centroid {c:?}");
 }
+
+/// Found by the property test: a spring from a pin to a free particle lying
+/// in a thin box made the edge pass lever the free particle 5 cm inside.
+#[test]
+fn the_edge_pass_never_leaves_a_particle_inside() {
+    let mut m = Material::silk();
+    m.stretch.stiffness *= 3.5064273;
+    let mut cloth = ClothBuilder::new(3, 2)
+        .size(0.8, 0.6)
+        .material(m)
+        .pins(PinPreset::FlagColumn)
+        .integrator(Integrator::Verlet)
+        .build()
+        .unwrap();
+    let pose = Pose::from_parts(
+        Vector::new(0.0, 0.0, 0.23261665),
+        Rotation::from_xyzw(0.0, 0.9224687, 0.33418396, 0.19331966),
+    );
+    let obstacle = Obstacle::new(
+        SharedShape::cuboid(0.18145694, 0.058075402, 0.2778111),
+        pose,
+    );
+    for _ in 0..20 {
+        cloth
+            .step(0.0039010306, std::slice::from_ref(&obstacle))
+            .unwrap();
+        for (i, &p) in cloth.positions().iter().enumerate() {
+            if !cloth.is_pinned(i) {
+                let depth = penetration_depth(&*obstacle.shape, &pose, p);
+                assert!(depth <= 1e-3, "particle {i} is {depth} m inside");
+            }
+        }
+    }
+}

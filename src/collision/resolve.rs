@@ -48,6 +48,8 @@ pub(crate) struct Collider {
     normal: Vec<Vector>,
     /// Per particle: distance to that obstacle after resolution (m).
     distance: Vec<f32>,
+    /// Per particle: moved by the edge pass in this substep.
+    edge_moved: Vec<bool>,
     reach: f32,
     /// Momentum handed to each obstacle during the current step.
     pub impulses: Vec<ObstacleImpulse>,
@@ -98,6 +100,7 @@ impl Collider {
         self.nearest.resize(particles, NONE);
         self.normal.resize(particles, Vector::ZERO);
         self.distance.resize(particles, f32::INFINITY);
+        self.edge_moved.resize(particles, false);
         self.touching.resize(particles, false);
         self.contact_obstacle.resize(particles, NONE);
         self.contact_immovable.resize(particles, false);
@@ -382,8 +385,36 @@ impl Collider {
                     self.resolve_spring(particles, a, b, obstacles, 0.5 * thickness);
                 }
             }
+            // Particles come first: whatever the springs did, every particle
+            // the edge pass moved ends the substep outside the obstacles.
+            for i in 0..particles.len() {
+                if std::mem::take(&mut self.edge_moved[i]) && particles.inv_mass[i] != 0.0 {
+                    self.push_out(particles, i, obstacles, thickness);
+                }
+            }
         }
         contacts
+    }
+
+    /// Moves particle `i` out to the thickness of every obstacle it is inside
+    /// (positions and the inward normal velocity only).
+    fn push_out(&mut self, p: &mut Particles, i: usize, obstacles: &[Obstacle], thickness: f32) {
+        self.gather(p.x[i]);
+        for c in 0..self.candidates.len() {
+            let o = self.candidates[c] as usize;
+            let Some(contact) = contact(&*obstacles[o].shape, &self.poses[o], p.x[i]) else {
+                continue;
+            };
+            if contact.signed_distance < thickness {
+                let n = contact.normal;
+                p.x[i] += n * (thickness - contact.signed_distance);
+                let surface_v = self.surface_velocity_of(obstacles, o, p.x[i]);
+                let vn = (p.v[i] - surface_v).dot(n);
+                if vn < 0.0 {
+                    p.v[i] -= n * vn;
+                }
+            }
+        }
     }
 
     /// Pushes particle `i` out of obstacle `o` and applies friction.
@@ -468,6 +499,17 @@ impl Collider {
                 }
                 None => &EDGE_SAMPLES,
             };
+            // A pinned end held inside the obstacle cannot be moved out: the
+            // spring cannot be resolved, and pushing its free end would only
+            // shove it about.
+            let pinned_inside = [(a, wa), (b, wb)].iter().any(|&(i, w)| {
+                w == 0.0
+                    && contact(&*obstacle.shape, &pose, p.x[i])
+                        .is_some_and(|c| c.signed_distance < 0.0)
+            });
+            if pinned_inside {
+                continue;
+            }
             for &t in samples {
                 let sample = p.x[a] * (1.0 - t) + p.x[b] * t;
                 let Some(contact) = contact(&*obstacle.shape, &pose, sample) else {
@@ -482,12 +524,16 @@ impl Collider {
                     continue;
                 }
                 let n = contact.normal;
-                let push = n * ((margin - contact.signed_distance) / denom);
+                let depth = margin - contact.signed_distance;
+                let push = n * (depth / denom);
                 for (i, w) in [(a, ca), (b, cb)] {
                     if w == 0.0 {
                         continue;
                     }
-                    p.x[i] += push * w;
+                    // No end moves further than the sample is deep: near a
+                    // pinned end the lever would otherwise fling the free one.
+                    p.x[i] += (push * w).clamp_length_max(depth);
+                    self.edge_moved[i] = true;
                     let surface_v = self.surface_velocity_of(obstacles, o, p.x[i]);
                     let vn = (p.v[i] - surface_v).dot(n);
                     if vn < 0.0 {
