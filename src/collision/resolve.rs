@@ -524,15 +524,12 @@ impl Collider {
                     continue;
                 }
                 let n = contact.normal;
-                let depth = margin - contact.signed_distance;
-                let push = n * (depth / denom);
+                let push = n * ((margin - contact.signed_distance) / denom);
                 for (i, w) in [(a, ca), (b, cb)] {
                     if w == 0.0 {
                         continue;
                     }
-                    // No end moves further than the sample is deep: near a
-                    // pinned end the lever would otherwise fling the free one.
-                    p.x[i] += (push * w).clamp_length_max(depth);
+                    p.x[i] += push * w;
                     self.edge_moved[i] = true;
                     let surface_v = self.surface_velocity_of(obstacles, o, p.x[i]);
                     let vn = (p.v[i] - surface_v).dot(n);
