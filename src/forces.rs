@@ -3,7 +3,7 @@
 //! Every function here is pure: it reads positions and velocities and adds
 //! forces (N) or accelerations (m/s²) into a buffer.
 
-use crate::cloth::{Cloth, SpringKind, SpringParams, Springs, Wind};
+use crate::cloth::{Cloth, Material, SimulationParams, SpringKind, SpringParams, Springs, Wind};
 use crate::math::Vector;
 
 /// Force on particle `a` from a spring joining it to `b`, in newtons:
@@ -164,6 +164,29 @@ pub(crate) struct ForceModel<'a> {
 }
 
 impl<'a> ForceModel<'a> {
+    /// The force model of a cloth's parts: the masses are passed apart from
+    /// the cloth so integrators can borrow the positions mutably meanwhile.
+    pub fn new(
+        springs: &'a Springs,
+        material: &Material,
+        triangles: &'a [[u32; 3]],
+        mass: &'a [f32],
+        inv_mass: &'a [f32],
+        params: &SimulationParams,
+    ) -> Self {
+        ForceModel {
+            springs,
+            spring_params: SpringKind::ALL.map(|k| material.params(k)),
+            triangles,
+            mass,
+            inv_mass,
+            gravity: params.gravity,
+            air_drag: params.air_drag,
+            wind: params.wind,
+            parallel: params.parallel,
+        }
+    }
+
     /// Total force on every particle, in newtons, written into `f`.
     pub fn forces(&self, x: &[Vector], v: &[Vector], f: &mut [Vector]) {
         for i in 0..f.len() {
@@ -196,17 +219,14 @@ impl Cloth {
         if f.len() != self.particle_count() {
             return;
         }
-        let model = ForceModel {
-            springs: &self.springs,
-            spring_params: SpringKind::ALL.map(|k| self.material.params(k)),
-            triangles: &self.triangles,
-            mass: &self.particles.mass,
-            inv_mass: &self.particles.inv_mass,
-            gravity: self.params.gravity,
-            air_drag: self.params.air_drag,
-            wind: self.params.wind,
-            parallel: self.params.parallel,
-        };
+        let model = ForceModel::new(
+            &self.springs,
+            &self.material,
+            &self.triangles,
+            &self.particles.mass,
+            &self.particles.inv_mass,
+            &self.params,
+        );
         model.forces(&self.particles.x, &self.particles.v, f);
     }
 }

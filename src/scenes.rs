@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use rapier3d::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle};
 
 use crate::cloth::{Cloth, ClothBuilder, Material, PinPreset, Substeps, Wind};
-use crate::collision::{penetration_depth, Obstacle};
+use crate::collision::Obstacle;
 use crate::error::{positive, ClothError};
 use crate::integrators::Integrator;
 use crate::math::{Pose, Vector};
@@ -352,18 +352,7 @@ impl Scene {
     pub fn max_penetration(&self) -> f32 {
         match &self.rapier {
             None => crate::metrics::max_penetration(&self.cloth, &self.obstacles),
-            Some(side) => {
-                let mut deepest = 0.0f32;
-                for (_, c) in side.world.colliders.iter() {
-                    let aabb = c.compute_aabb();
-                    for &p in self.cloth.positions() {
-                        if aabb.contains_local_point(p) {
-                            deepest = deepest.max(penetration_depth(c.shape(), c.position(), p));
-                        }
-                    }
-                }
-                deepest
-            }
+            Some(_) => crate::metrics::max_penetration(&self.cloth, &self.current_obstacles()),
         }
     }
 }

@@ -288,19 +288,7 @@ impl Collider {
             if inv_mass[i] == 0.0 {
                 continue;
             }
-            self.gather(x[i]);
-            self.pushed[i] = 0.0;
-            for c in 0..self.candidates.len() {
-                let o = self.candidates[c] as usize;
-                let Some(contact) = contact(&*obstacles[o].shape, &self.poses[o], x[i]) else {
-                    continue;
-                };
-                if contact.signed_distance < thickness {
-                    let depth = thickness - contact.signed_distance;
-                    x[i] += contact.normal * depth;
-                    self.pushed[i] += depth;
-                }
-            }
+            self.pushed[i] = self.move_out(&mut x[i], None, obstacles, thickness);
         }
     }
 
@@ -399,22 +387,39 @@ impl Collider {
     /// Moves particle `i` out to the thickness of every obstacle it is inside
     /// (positions and the inward normal velocity only).
     fn push_out(&mut self, p: &mut Particles, i: usize, obstacles: &[Obstacle], thickness: f32) {
-        self.gather(p.x[i]);
+        self.move_out(&mut p.x[i], Some(&mut p.v[i]), obstacles, thickness);
+    }
+
+    /// Moves the point `x` out to the thickness of every obstacle it is
+    /// inside; with a velocity, also takes away its part into each surface.
+    /// Returns how far it moved along the normals, in metres.
+    fn move_out(
+        &mut self,
+        x: &mut Vector,
+        mut v: Option<&mut Vector>,
+        obstacles: &[Obstacle],
+        thickness: f32,
+    ) -> f32 {
+        let mut moved = 0.0;
+        self.gather(*x);
         for c in 0..self.candidates.len() {
             let o = self.candidates[c] as usize;
-            let Some(contact) = contact(&*obstacles[o].shape, &self.poses[o], p.x[i]) else {
+            let Some(contact) = contact(&*obstacles[o].shape, &self.poses[o], *x) else {
                 continue;
             };
             if contact.signed_distance < thickness {
-                let n = contact.normal;
-                p.x[i] += n * (thickness - contact.signed_distance);
-                let surface_v = self.surface_velocity_of(obstacles, o, p.x[i]);
-                let vn = (p.v[i] - surface_v).dot(n);
-                if vn < 0.0 {
-                    p.v[i] -= n * vn;
+                let (n, depth) = (contact.normal, thickness - contact.signed_distance);
+                *x += n * depth;
+                moved += depth;
+                if let Some(v) = v.as_deref_mut() {
+                    let vn = (*v - self.surface_velocity_of(obstacles, o, *x)).dot(n);
+                    if vn < 0.0 {
+                        *v -= n * vn;
+                    }
                 }
             }
         }
+        moved
     }
 
     /// Pushes particle `i` out of obstacle `o` and applies friction.

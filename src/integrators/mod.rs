@@ -180,17 +180,14 @@ pub(crate) fn substep(
         ..
     } = cloth;
     // Borrow the model immutably from the parts that integrators do not write.
-    let model = ForceModel {
-        springs: &cloth.springs,
-        spring_params: SpringKind::ALL.map(|k| cloth.material.params(k)),
-        triangles: &cloth.triangles,
-        mass: &particles.mass,
-        inv_mass: &particles.inv_mass,
-        gravity: cloth.params.gravity,
-        air_drag: cloth.params.air_drag,
-        wind: cloth.params.wind,
-        parallel: cloth.params.parallel,
-    };
+    let model = ForceModel::new(
+        &cloth.springs,
+        &cloth.material,
+        &cloth.triangles,
+        &particles.mass,
+        &particles.inv_mass,
+        &cloth.params,
+    );
     let (x, v) = (&mut particles.x, &mut particles.v);
     particles.x_prev.copy_from_slice(x);
     let params = &cloth.params;
