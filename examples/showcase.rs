@@ -5,6 +5,8 @@
 //! cargo run --release --features viewer --example showcase
 //! # headless, no display needed:
 //! cargo run --release --features viewer --example showcase -- --screenshot drape.png --frames 120 --scene drape
+//! # a scene file of your own (R reloads it after you edit it):
+//! cargo run --release --features viewer --example showcase -- --scene examples/scenes/capsule_drape.ron
 //! ```
 //!
 //! Keys: 1–6 scene · I integrator · M material · P pin preset · Space pause ·
@@ -12,15 +14,55 @@
 //! select it · X pin/unpin it · Ctrl+drag to pull it · H help.
 
 use cloth3d::prelude::*;
-use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
+use cloth3d::scenes::{file, Scene, SceneKind, SceneOptions};
 use cloth3d::viewer::{self, SceneView, TraceMode};
 use kiss3d::egui;
 use kiss3d::prelude::*;
 
+/// Where the scene on screen comes from.
+#[derive(Debug, Clone, PartialEq)]
+enum Source {
+    Canonical(SceneKind),
+    File(std::path::PathBuf),
+}
+
+impl Source {
+    fn parse(name: &str) -> Result<Source, String> {
+        if let Ok(kind) = SceneKind::from_name(name) {
+            return Ok(Source::Canonical(kind));
+        }
+        let path = std::path::PathBuf::from(name);
+        if path.exists() {
+            Ok(Source::File(path))
+        } else {
+            Err(format!(
+                "unknown scene '{name}': valid choices are {}, or the path of a .ron scene file",
+                SceneKind::ALL.map(|s| s.name()).join(", ")
+            ))
+        }
+    }
+
+    fn build(&self, options: &SceneOptions) -> Result<Scene, String> {
+        match self {
+            Source::Canonical(kind) => Scene::build(*kind, options).map_err(|e| e.to_string()),
+            Source::File(path) => {
+                file::load_scene(path, options).map_err(|e| format!("{}: {e}", path.display()))
+            }
+        }
+    }
+
+    fn variants(&self) -> &'static [PinPreset] {
+        match self {
+            Source::Canonical(kind) => kind.variants(),
+            Source::File(_) => &[],
+        }
+    }
+}
+
 struct Args {
     screenshot: Option<String>,
     frames: u32,
-    scene: SceneKind,
+    scene: Source,
     options: SceneOptions,
     size: (u32, u32),
 }
@@ -29,7 +71,7 @@ fn parse_args() -> Result<Args, String> {
     let mut args = Args {
         screenshot: None,
         frames: 120,
-        scene: SceneKind::Drape,
+        scene: Source::Canonical(SceneKind::Drape),
         options: SceneOptions::default(),
         size: (1280, 720),
     };
@@ -43,7 +85,7 @@ fn parse_args() -> Result<Args, String> {
                     .parse()
                     .map_err(|_| "--frames takes a whole number".to_string())?
             }
-            "--scene" => args.scene = SceneKind::from_name(&value()?).map_err(|e| e.to_string())?,
+            "--scene" => args.scene = Source::parse(&value()?)?,
             "--integrator" => {
                 args.options.integrator =
                     Some(Integrator::from_name(&value()?).map_err(|e| e.to_string())?)
@@ -87,15 +129,14 @@ async fn main() {
         }
     };
     if let Some(path) = &args.screenshot {
-        match viewer::screenshot(
-            args.scene,
-            &args.options,
-            args.frames,
-            std::path::Path::new(path),
-            args.size,
-        )
-        .await
-        {
+        let scene = match args.scene.build(&args.options) {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("error: {e}");
+                std::process::exit(2);
+            }
+        };
+        match viewer::screenshot(scene, args.frames, std::path::Path::new(path), args.size).await {
             Ok(()) => println!("wrote {path}"),
             Err(e) => {
                 eprintln!("error: {e}");
@@ -109,7 +150,7 @@ async fn main() {
 
 /// Everything the window shows and the keys change.
 struct Showcase {
-    kind: SceneKind,
+    kind: Source,
     options: SceneOptions,
     scene: Scene,
     view: SceneView,
@@ -117,6 +158,8 @@ struct Showcase {
     paused: bool,
     trace: TraceMode,
     selected: Option<usize>,
+    /// The pin preset chosen with P on a scene without variants.
+    pins: Option<PinPreset>,
     dragging: Option<(usize, bool)>,
     wind_on: bool,
     help: bool,
@@ -128,28 +171,29 @@ struct Showcase {
 impl Showcase {
     fn load(
         root: &mut SceneNode3d,
-        kind: SceneKind,
+        kind: &Source,
         options: SceneOptions,
-    ) -> Result<(Scene, SceneView), ClothError> {
-        let scene = Scene::build(kind, &options)?;
+    ) -> Result<(Scene, SceneView), String> {
+        let scene = kind.build(&options)?;
         let view = SceneView::new(root, &scene);
         Ok((scene, view))
     }
 
-    fn switch(&mut self, root: &mut SceneNode3d, kind: SceneKind, keep_camera: bool) {
+    fn switch(&mut self, root: &mut SceneNode3d, kind: Source, keep_camera: bool) {
         if kind != self.kind {
             self.options.variant = None;
         }
-        match Self::load(root, kind, self.options.clone()) {
+        match Self::load(root, &kind, self.options.clone()) {
             Ok((scene, view)) => {
                 let old = std::mem::replace(&mut self.view, view);
                 old.remove();
                 self.scene = scene;
                 if !keep_camera || kind != self.kind {
-                    self.camera = viewer::camera_for(kind);
+                    self.camera = viewer::camera_for(&self.scene);
                 }
                 self.kind = kind;
                 self.selected = None;
+                self.pins = None;
                 self.dragging = None;
                 self.wind_on = !self.scene.cloth.params.wind.is_calm();
                 self.message.clear();
@@ -169,7 +213,7 @@ async fn interactive(args: Args) {
     window.set_background_color(viewer::BACKGROUND);
     let mut root = SceneNode3d::empty();
     viewer::add_lights(&mut root);
-    let (scene, view) = match Showcase::load(&mut root, args.scene, args.options.clone()) {
+    let (scene, view) = match Showcase::load(&mut root, &args.scene, args.options.clone()) {
         Ok(x) => x,
         Err(e) => {
             eprintln!("error: {e}");
@@ -180,12 +224,13 @@ async fn interactive(args: Args) {
         kind: args.scene,
         options: args.options,
         wind_on: !scene.cloth.params.wind.is_calm(),
+        camera: viewer::camera_for(&scene),
         scene,
         view,
-        camera: viewer::camera_for(args.scene),
         paused: false,
         trace: TraceMode::Off,
         selected: None,
+        pins: None,
         dragging: None,
         help: true,
         message: String::new(),
@@ -246,7 +291,7 @@ async fn interactive(args: Args) {
                     .iter()
                     .position(|k| *k == key);
                     if let Some(s) = scene_key {
-                        app.switch(&mut root, kinds[s], false);
+                        app.switch(&mut root, Source::Canonical(kinds[s]), false);
                         continue;
                     }
                     match key {
@@ -255,7 +300,7 @@ async fn interactive(args: Args) {
                             app.paused = true;
                             step_once = true;
                         }
-                        Key::R => app.switch(&mut root, app.kind, true),
+                        Key::R => app.switch(&mut root, app.kind.clone(), true),
                         Key::T => app.trace = app.trace.next(),
                         Key::H => app.help = !app.help,
                         Key::W => {
@@ -288,20 +333,18 @@ async fn interactive(args: Args) {
                             }
                         }
                         Key::P => {
-                            let presets = if app.kind.variants().is_empty() {
-                                &PinPreset::ALL[..]
-                            } else {
-                                app.kind.variants()
-                            };
-                            let current = app.options.variant.unwrap_or(presets[0]);
-                            let next = next_in(presets, current);
                             if app.kind.variants().is_empty() {
+                                // Scenes without variants: change the pins of the cloth on screen.
+                                let current = app.pins.unwrap_or(PinPreset::None);
+                                let next = next_in(&PinPreset::ALL, current);
                                 let _ = app.scene.cloth.apply_pin_preset(next);
-                                app.options.variant = Some(next);
+                                app.pins = Some(next);
                                 app.message = format!("pins: {}", next.name());
                             } else {
-                                app.options.variant = Some(next);
-                                app.switch(&mut root, app.kind, true);
+                                let presets = app.kind.variants();
+                                let current = app.options.variant.unwrap_or(presets[0]);
+                                app.options.variant = Some(next_in(presets, current));
+                                app.switch(&mut root, app.kind.clone(), true);
                             }
                         }
                         Key::X => {
@@ -369,7 +412,7 @@ fn overlay_text(window: &mut Window, font: &std::sync::Arc<Font>, app: &Showcase
     let lines = [
         format!(
             "{}{}  |  {}  |  {}  |  {} particles, {} springs",
-            app.kind.name(),
+            app.scene.name,
             app.scene.variant.map(|v| format!(" ({})", v.name())).unwrap_or_default(),
             cloth.params.integrator,
             cloth.material.name,

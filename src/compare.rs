@@ -3,11 +3,12 @@
 
 use std::time::Instant;
 
-use image::{Rgb, RgbImage};
+use image::RgbImage;
 use serde::{Deserialize, Serialize};
 
 use crate::error::ClothError;
 use crate::integrators::Integrator;
+use crate::plot::{draw, Curve, Panel};
 use crate::scenes::{Scene, SceneKind, SceneOptions};
 
 /// How one integrator did.
@@ -93,82 +94,36 @@ pub fn compare(
 }
 
 /// A line colour per integrator, in the order of [`Integrator::ALL`].
-pub const COLORS: [[u8; 3]; 6] = [
-    [230, 80, 60],
-    [60, 160, 230],
-    [90, 200, 90],
-    [200, 120, 230],
-    [240, 190, 40],
-    [40, 210, 200],
-];
+pub const COLORS: [[u8; 3]; 6] = crate::plot::COLORS;
 
-/// Draws energy (top) and max stretch (bottom) against time, one line per
-/// integrator in [`COLORS`], on a `width × height` picture.
-pub fn plot(rows: &[Comparison], width: u32, height: u32) -> RgbImage {
-    let mut img = RgbImage::from_pixel(width, height, Rgb([24, 26, 32]));
-    let half = height / 2;
-    let frames = rows
-        .iter()
-        .map(|r| r.energy.len())
-        .max()
-        .unwrap_or(1)
-        .max(2);
-    let energy: Vec<Vec<f64>> = rows.iter().map(|r| r.energy.clone()).collect();
-    let stretch: Vec<Vec<f64>> = rows
-        .iter()
-        .map(|r| r.stretch.iter().map(|&s| s as f64).collect())
-        .collect();
-    for (top, values) in [(0, energy), (half, stretch)] {
-        let (lo, hi) = values
-            .iter()
-            .flatten()
-            .filter(|v| v.is_finite())
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                (a.min(v), b.max(v))
-            });
-        let (lo, hi) = if lo < hi {
-            (lo, hi)
-        } else {
-            (lo - 1.0, lo + 1.0)
-        };
-        let margin = 12.0;
-        let (w, h) = (width as f64 - 2.0 * margin, half as f64 - 2.0 * margin);
-        // Frame and zero line.
-        for x in margin as u32..(width - margin as u32) {
-            img.put_pixel(x, top + half - margin as u32, Rgb([90, 90, 100]));
-        }
-        if lo < 0.0 && hi > 0.0 {
-            let y0 = top as f64 + margin + h * (hi / (hi - lo));
-            for x in (margin as u32..(width - margin as u32)).step_by(4) {
-                img.put_pixel(x, y0 as u32, Rgb([70, 70, 80]));
-            }
-        }
-        for (k, line) in values.iter().enumerate() {
-            let color = Rgb(COLORS[k % COLORS.len()]);
-            let point = |i: usize, v: f64| {
-                let x = margin + w * i as f64 / (frames - 1) as f64;
-                let y = top as f64 + margin + h * (hi - v) / (hi - lo);
-                (x, y)
-            };
-            for i in 1..line.len() {
-                let (a, b) = (point(i - 1, line[i - 1]), point(i, line[i]));
-                draw_line(&mut img, a, b, color);
-            }
-        }
-    }
-    img
-}
-
-fn draw_line(img: &mut RgbImage, a: (f64, f64), b: (f64, f64), color: Rgb<u8>) {
-    let steps = ((b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil() as usize).clamp(1, 4096);
-    for s in 0..=steps {
-        let t = s as f64 / steps as f64;
-        let (x, y) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
-        for (dx, dy) in [(0.0, 0.0), (0.0, 1.0), (1.0, 0.0)] {
-            let (px, py) = ((x + dx) as i64, (y + dy) as i64);
-            if px >= 0 && py >= 0 && (px as u32) < img.width() && (py as u32) < img.height() {
-                img.put_pixel(px as u32, py as u32, color);
-            }
-        }
-    }
+/// The plot: energy (top) and max stretch (bottom) against the frame, one
+/// line per integrator in the colours of [`COLORS`], with a legend.
+pub fn plot(rows: &[Comparison], width: u32, height: u32) -> Result<RgbImage, String> {
+    let curves = |value: &dyn Fn(&Comparison) -> Vec<f64>| {
+        rows.iter()
+            .enumerate()
+            .map(|(k, r)| Curve {
+                label: r.integrator.clone(),
+                points: value(r)
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, v)| ((i + 1) as f64, v))
+                    .collect(),
+                color: COLORS[k % COLORS.len()],
+            })
+            .collect()
+    };
+    let panels = [
+        Panel {
+            title: "total energy".into(),
+            y_label: "energy (J)".into(),
+            curves: curves(&|r| r.energy.clone()),
+        },
+        Panel {
+            title: "max stretch".into(),
+            y_label: "stretch (%)".into(),
+            curves: curves(&|r| r.stretch.iter().map(|&s| 100.0 * s as f64).collect()),
+        },
+    ];
+    draw(&panels, "frame", width, height)
 }

@@ -127,6 +127,132 @@ pub enum ClothError {
     /// The linear solver of an implicit integrator could not be built.
     #[error("linear solver failed: {0}")]
     Solver(String),
+    /// A scene file could not be read: where, which field, and why.
+    #[error("line {line}, column {column}{}: {message}", field_suffix(field))]
+    SceneFile {
+        /// Line of the error, counted from 1 (0 when it has no place in the text).
+        line: usize,
+        /// Column of the error, counted from 1.
+        column: usize,
+        /// Path of the field that is wrong, for example `cloth.material.stretch.stiffness`
+        /// (empty when the error is in the syntax itself).
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A file could not be read or written.
+    #[error("{path}: {message}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The system's message.
+        message: String,
+    },
+}
+
+fn field_suffix(field: &str) -> String {
+    if field.is_empty() {
+        String::new()
+    } else {
+        format!(", field `{field}`")
+    }
+}
+
+/// serde checks for numeric fields of scene files and snapshots, so that a bad
+/// value is reported with its line and field while the file is read.
+pub(crate) mod de {
+    use serde::{de::Error, Deserialize, Deserializer};
+
+    /// A finite `f32 > 0`.
+    pub fn positive<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
+        let v = f32::deserialize(d)?;
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(D::Error::custom(format!(
+                "invalid value {v}: expected a finite number > 0"
+            )))
+        }
+    }
+
+    /// A finite `f32 >= 0`.
+    pub fn non_negative<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
+        let v = f32::deserialize(d)?;
+        if v.is_finite() && v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(D::Error::custom(format!(
+                "invalid value {v}: expected a finite number >= 0"
+            )))
+        }
+    }
+
+    /// An optional finite `f32 > 0`.
+    pub fn opt_positive<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f32>, D::Error> {
+        match Option::<f32>::deserialize(d)? {
+            Some(v) if !(v.is_finite() && v > 0.0) => Err(D::Error::custom(format!(
+                "invalid value {v}: expected a finite number > 0"
+            ))),
+            v => Ok(v),
+        }
+    }
+
+    /// An optional finite `f32 >= 0`.
+    pub fn opt_non_negative<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f32>, D::Error> {
+        match Option::<f32>::deserialize(d)? {
+            Some(v) if !(v.is_finite() && v >= 0.0) => Err(D::Error::custom(format!(
+                "invalid value {v}: expected a finite number >= 0"
+            ))),
+            v => Ok(v),
+        }
+    }
+
+    /// A grid dimension: at least 2 particles.
+    pub fn grid_side<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
+        let v = usize::deserialize(d)?;
+        if v >= 2 {
+            Ok(v)
+        } else {
+            Err(D::Error::custom(format!(
+                "invalid value {v}: a cloth needs at least 2 particles along each side"
+            )))
+        }
+    }
+
+    /// A count of at least 1.
+    pub fn at_least_one<'de, D: Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
+        let v = u32::deserialize(d)?;
+        if v >= 1 {
+            Ok(v)
+        } else {
+            Err(D::Error::custom(
+                "invalid value 0: expected a whole number >= 1",
+            ))
+        }
+    }
+
+    /// A vector with finite components.
+    pub fn finite_vec<'de, D: Deserializer<'de>>(d: D) -> Result<crate::math::Vector, D::Error> {
+        let v = crate::math::Vector::deserialize(d)?;
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(D::Error::custom("every component must be finite"))
+        }
+    }
+
+    /// A vector with finite, strictly positive components (half-extents).
+    pub fn positive_vec<'de, D: Deserializer<'de>>(d: D) -> Result<crate::math::Vector, D::Error> {
+        let v = crate::math::Vector::deserialize(d)?;
+        if v.is_finite() && v.min_element() > 0.0 {
+            Ok(v)
+        } else {
+            Err(D::Error::custom(format!(
+                "invalid value ({}, {}, {}): every component must be a finite number > 0",
+                v.x, v.y, v.z
+            )))
+        }
+    }
 }
 
 /// Checks that `value` is finite and strictly positive.

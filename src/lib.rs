@@ -35,6 +35,7 @@ pub mod forces;
 pub mod integrators;
 pub mod metrics;
 pub mod pipeline;
+pub mod plot;
 pub mod rapier;
 pub mod scenes;
 #[cfg(feature = "viewer")]
@@ -48,6 +49,7 @@ pub use collision::Obstacle;
 pub use error::ClothError;
 pub use integrators::Integrator;
 pub use pipeline::StepReport;
+pub use scenes::{Scene, SceneDesc, SceneKind};
 
 /// The math types of parry3d and rapier3d (glam-based, `f32`).
 pub mod math {

@@ -117,7 +117,7 @@ pub fn run_with(
     let c = cloth.centroid();
     let iterative = iterations > 0;
     Ok(RunMetrics {
-        scene: scene.kind.name().to_string(),
+        scene: scene.name.clone(),
         variant: scene.variant.map(|v| v.name().to_string()),
         n: grid[0],
         grid,
@@ -155,4 +155,75 @@ pub fn run_with(
             0.0
         },
     })
+}
+
+/// The run metrics frame by frame, for plotting (`cloth3d run --plot`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Series {
+    /// Simulated time at the end of each frame, in seconds.
+    pub time: Vec<f64>,
+    /// Total energy (kinetic + gravity + elastic), in joules.
+    pub energy: Vec<f64>,
+    /// Largest stretch-spring strain (length / rest length − 1).
+    pub max_stretch: Vec<f64>,
+    /// Deepest particle inside an obstacle, in metres.
+    pub max_penetration: Vec<f64>,
+}
+
+impl Series {
+    /// Records the scene as it is now.
+    pub fn push(&mut self, scene: &Scene) {
+        self.time.push(scene.frame as f64 * scene.dt as f64);
+        self.energy.push(scene.cloth.energy().total());
+        self.max_stretch.push(max_stretch(&scene.cloth) as f64);
+        self.max_penetration.push(scene.max_penetration() as f64);
+    }
+
+    /// Frames recorded.
+    pub fn len(&self) -> usize {
+        self.time.len()
+    }
+
+    /// True when nothing was recorded.
+    pub fn is_empty(&self) -> bool {
+        self.time.is_empty()
+    }
+
+    /// Three panels over time: energy (J), max stretch (%), max penetration (mm).
+    pub fn plot(&self, title: &str, width: u32, height: u32) -> Result<image::RgbImage, String> {
+        use crate::plot::{draw, Curve, Panel, COLORS};
+        let curve = |values: &[f64], scale: f64, color: [u8; 3], label: &str| Curve {
+            label: label.to_string(),
+            points: self
+                .time
+                .iter()
+                .zip(values)
+                .map(|(&t, &v)| (t, v * scale))
+                .collect(),
+            color,
+        };
+        let panels = [
+            Panel {
+                title: format!("{title}: total energy"),
+                y_label: "energy (J)".into(),
+                curves: vec![curve(&self.energy, 1.0, COLORS[1], "energy")],
+            },
+            Panel {
+                title: "max stretch".into(),
+                y_label: "stretch (%)".into(),
+                curves: vec![curve(&self.max_stretch, 100.0, COLORS[0], "max stretch")],
+            },
+            Panel {
+                title: "max penetration".into(),
+                y_label: "penetration (mm)".into(),
+                curves: vec![curve(
+                    &self.max_penetration,
+                    1000.0,
+                    COLORS[2],
+                    "max penetration",
+                )],
+            },
+        ];
+        draw(&panels, "time (s)", width, height)
+    }
 }

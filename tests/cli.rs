@@ -172,10 +172,18 @@ fn compare_runs_every_integrator_and_writes_a_plot() {
         assert!(row["energy_change"].as_f64().unwrap() < 0.0, "{row}");
     }
     let img = image::open(&plot).unwrap().to_rgb8();
-    assert_eq!((img.width(), img.height()), (900, 600));
-    // Six coloured lines: many pixels differ from the background.
-    let background = *img.get_pixel(0, 0);
-    assert!(img.pixels().filter(|p| **p != background).count() > 2000);
+    assert_eq!((img.width(), img.height()), (900, 700));
+    // One line per integrator, in its colour, in both panels (energy on top,
+    // stretch below).
+    for color in cloth3d::compare::COLORS {
+        for half in [0..350, 350..700] {
+            let count = img
+                .enumerate_pixels()
+                .filter(|(_, y, p)| half.contains(y) && p.0 == color)
+                .count();
+            assert!(count > 50, "{color:?}: {count} pixels in rows {half:?}");
+        }
+    }
     let _ = std::fs::remove_file(&plot);
 }
 

@@ -7,7 +7,7 @@ use clap::{Parser, Subcommand};
 use cloth3d::cloth::{Material, PinPreset, Substeps};
 use cloth3d::integrators::Integrator;
 use cloth3d::metrics::{run_with, RunMetrics};
-use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
+use cloth3d::scenes::{file, Scene, SceneKind, SceneOptions};
 
 #[derive(Parser)]
 #[command(
@@ -30,6 +30,63 @@ enum Command {
     Bench(BenchArgs),
     /// Run every integrator on one scene at the same frame step: a table and a plot.
     Compare(CompareArgs),
+    /// Write a canonical scene as a RON scene file (on stdout, or to --output).
+    ExportScene(ExportSceneArgs),
+}
+
+#[derive(clap::Args)]
+struct ExportSceneArgs {
+    /// Scene name, or a scene file to rewrite with the options applied.
+    scene: String,
+    #[command(flatten)]
+    options: SceneArgs,
+    /// Write to this file instead of stdout.
+    #[arg(long, short)]
+    output: Option<std::path::PathBuf>,
+}
+
+/// The choices that change a scene, shared by `run` and `export-scene`.
+#[derive(clap::Args)]
+struct SceneArgs {
+    /// Particles along a row (rows follow the scene's aspect ratio).
+    #[arg(long, value_parser = parse_n, allow_hyphen_values = true)]
+    n: Option<usize>,
+    /// Time integrator.
+    #[arg(long, value_parser = parse_integrator)]
+    integrator: Option<Integrator>,
+    /// Material preset.
+    #[arg(long, value_parser = parse_material)]
+    material: Option<Material>,
+    /// Frame step in seconds.
+    #[arg(long, value_parser = parse_positive, allow_hyphen_values = true)]
+    dt: Option<f32>,
+    /// Substeps per frame: a whole number >= 1, or `auto`.
+    #[arg(long, value_parser = parse_substeps)]
+    substeps: Option<Substeps>,
+    /// Frames to simulate.
+    #[arg(long, value_parser = parse_frames, allow_hyphen_values = true)]
+    frames: Option<u32>,
+    /// Pin variant (the `pins` scene; for a scene file, any pin preset).
+    #[arg(long, value_parser = parse_variant)]
+    variant: Option<PinPreset>,
+    /// Friction coefficient of the obstacles.
+    #[arg(long, value_parser = parse_non_negative, allow_hyphen_values = true)]
+    friction: Option<f32>,
+}
+
+impl SceneArgs {
+    fn options(&self) -> SceneOptions {
+        SceneOptions {
+            n: self.n,
+            integrator: self.integrator,
+            material: self.material.clone(),
+            variant: self.variant,
+            dt: self.dt,
+            substeps: self.substeps,
+            frames: self.frames,
+            friction: self.friction,
+        }
+    }
 }
 
 #[derive(clap::Args)]
@@ -84,33 +141,10 @@ struct BenchArgs {
 
 #[derive(clap::Args)]
 struct RunArgs {
-    /// Scene name (see `cloth3d list`).
-    #[arg(value_parser = parse_scene)]
-    scene: SceneKind,
-    /// Particles along a row (rows follow the scene's aspect ratio).
-    #[arg(long, value_parser = parse_n, allow_hyphen_values = true)]
-    n: Option<usize>,
-    /// Time integrator.
-    #[arg(long, value_parser = parse_integrator)]
-    integrator: Option<Integrator>,
-    /// Material preset.
-    #[arg(long, value_parser = parse_material)]
-    material: Option<Material>,
-    /// Frame step in seconds.
-    #[arg(long, value_parser = parse_positive, allow_hyphen_values = true)]
-    dt: Option<f32>,
-    /// Substeps per frame: a whole number >= 1, or `auto`.
-    #[arg(long, value_parser = parse_substeps)]
-    substeps: Option<Substeps>,
-    /// Frames to simulate.
-    #[arg(long, value_parser = parse_frames, allow_hyphen_values = true)]
-    frames: Option<u32>,
-    /// Pin variant (the `pins` scene).
-    #[arg(long, value_parser = parse_variant)]
-    variant: Option<PinPreset>,
-    /// Friction coefficient of the obstacles.
-    #[arg(long, value_parser = parse_non_negative, allow_hyphen_values = true)]
-    friction: Option<f32>,
+    /// Scene name (see `cloth3d list`) or path to a RON scene file.
+    scene: String,
+    #[command(flatten)]
+    options: SceneArgs,
     /// Linearisations (Newton iterations) per substep (implicit-euler).
     #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
     newton_iterations: Option<u32>,
@@ -126,9 +160,35 @@ struct RunArgs {
     /// Local/global iterations per substep (fast-mass-spring).
     #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
     fms_iterations: Option<u32>,
+    /// Write the animation as one glTF 2.0 binary file: the final frame's
+    /// mesh, with every frame as a morph target played by an animation.
+    #[arg(long, value_name = "FILE.glb")]
+    export_glb: Option<std::path::PathBuf>,
+    /// Draw energy, max stretch and max penetration over time to a PNG.
+    #[arg(long, value_name = "FILE.png")]
+    plot: Option<std::path::PathBuf>,
+    /// No progress bar (it is only ever shown when stdout is a terminal).
+    #[arg(long, short)]
+    quiet: bool,
     /// Print exactly one JSON object and nothing else on stdout.
     #[arg(long)]
     json: bool,
+}
+
+/// A canonical scene by name, or a scene file.
+fn load_scene(name: &str, options: &SceneOptions) -> Result<Scene, String> {
+    if let Ok(kind) = SceneKind::from_name(name) {
+        return Scene::build(kind, options).map_err(|e| e.to_string());
+    }
+    let path = std::path::Path::new(name);
+    if path.exists() || name.ends_with(".ron") {
+        return cloth3d::scenes::file::load_scene(path, options)
+            .map_err(|e| format!("{}: {e}", path.display()));
+    }
+    Err(format!(
+        "unknown scene '{name}': valid choices are {}, or the path of a .ron scene file",
+        SceneKind::ALL.map(|s| s.name()).join(", ")
+    ))
 }
 
 fn parse_scene(s: &str) -> Result<SceneKind, String> {
@@ -218,6 +278,7 @@ fn main() -> ExitCode {
         Command::Run(args) => run_command(args),
         Command::Bench(args) => bench_command(args),
         Command::Compare(args) => compare_command(args),
+        Command::ExportScene(args) => export_scene_command(args),
     }
 }
 
@@ -297,18 +358,51 @@ fn list() {
     emit(&out);
 }
 
-fn run_command(args: RunArgs) -> ExitCode {
-    let options = SceneOptions {
-        n: args.n,
-        integrator: args.integrator,
-        material: args.material,
-        variant: args.variant,
-        dt: args.dt,
-        substeps: args.substeps,
-        frames: args.frames,
-        friction: args.friction,
+fn export_scene_command(args: ExportSceneArgs) -> ExitCode {
+    let options = args.options.options();
+    let desc = match SceneKind::from_name(&args.scene) {
+        Ok(kind) => kind.desc(&options).map_err(|e| e.to_string()),
+        Err(_) => load_scene(&args.scene, &options).map(|s| s.desc),
     };
-    let mut scene = match Scene::build(args.scene, &options) {
+    let text = match desc.and_then(|d| file::to_ron(&d).map_err(|e| e.to_string())) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    match &args.output {
+        None => emit(&text),
+        Some(path) => {
+            if let Err(e) = std::fs::write(path, text) {
+                eprintln!("error: cannot write {}: {e}", path.display());
+                return ExitCode::from(1);
+            }
+        }
+    }
+    ExitCode::SUCCESS
+}
+
+/// A progress bar on stderr when stdout is a terminal and not `--quiet`;
+/// hidden otherwise, so piped or `--json` output never carries progress text.
+fn progress_bar(frames: u32, quiet: bool, name: &str) -> indicatif::ProgressBar {
+    use std::io::IsTerminal as _;
+    if quiet || !std::io::stdout().is_terminal() || !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(frames as u64);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{prefix} [{bar:40}] {pos}/{len} frames, {per_sec}, {eta} left",
+    ) {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_prefix(name.to_string());
+    bar
+}
+
+fn run_command(args: RunArgs) -> ExitCode {
+    let options = args.options.options();
+    let mut scene = match load_scene(&args.scene, &options) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
@@ -336,14 +430,41 @@ fn run_command(args: RunArgs) -> ExitCode {
         }
     }
     let mut export_error = None;
+    let mut animation = args
+        .export_glb
+        .as_ref()
+        .map(|_| cloth3d::export::Animation::new(&scene.cloth, scene.dt));
+    let mut series = cloth3d::metrics::Series::default();
+    let bar = progress_bar(frames, args.quiet, &scene.name);
     let result = run_with(&mut scene, frames, |scene, frame| {
+        bar.inc(1);
         if let (Some(dir), None) = (&args.export_obj, &export_error) {
             let path = dir.join(format!("frame_{:04}.obj", frame + 1));
             if let Err(e) = cloth3d::export::write_obj(&scene.cloth, &path) {
                 export_error = Some(format!("cannot write {}: {e}", path.display()));
             }
         }
+        if let Some(anim) = &mut animation {
+            anim.push(&scene.cloth);
+        }
+        if args.plot.is_some() {
+            series.push(scene);
+        }
     });
+    bar.finish_and_clear();
+    if let (Some(path), Some(anim), None) = (&args.export_glb, &animation, &export_error) {
+        if let Err(e) = std::fs::write(path, anim.to_glb(&scene.cloth)) {
+            export_error = Some(format!("cannot write {}: {e}", path.display()));
+        }
+    }
+    if let (Some(path), None) = (&args.plot, &export_error) {
+        if let Err(e) = series
+            .plot(&scene.name, 900, 900)
+            .and_then(|img| img.save(path).map_err(|e| e.to_string()))
+        {
+            export_error = Some(format!("cannot write {}: {e}", path.display()));
+        }
+    }
     if let Some(e) = export_error {
         eprintln!("error: {e}");
         return ExitCode::from(1);
@@ -385,7 +506,9 @@ fn compare_command(args: CompareArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    if let Err(e) = plot(&rows, 900, 600).save(&args.plot) {
+    if let Err(e) =
+        plot(&rows, 900, 700).and_then(|img| img.save(&args.plot).map_err(|e| e.to_string()))
+    {
         eprintln!("error: cannot write {}: {e}", args.plot.display());
         return ExitCode::from(1);
     }

@@ -15,8 +15,10 @@ use crate::error::{non_negative, positive, ClothError};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SpringParams {
     /// Hooke stiffness `k`, in N/m.
+    #[serde(deserialize_with = "crate::error::de::positive")]
     pub stiffness: f32,
     /// Damping `c` along the spring, in N·s/m.
+    #[serde(deserialize_with = "crate::error::de::non_negative")]
     pub damping: f32,
 }
 
@@ -51,9 +53,15 @@ pub struct Material {
     /// Bend springs (two apart along rows and columns).
     pub bend: SpringParams,
     /// Areal density in kg/m², used when a cloth is built without a total mass.
+    #[serde(deserialize_with = "crate::error::de::positive")]
     pub density: f32,
     /// Display colour, linear RGB in 0..=1.
+    #[serde(default = "default_color")]
     pub color: [f32; 3],
+}
+
+fn default_color() -> [f32; 3] {
+    [0.8, 0.8, 0.8]
 }
 
 impl Material {

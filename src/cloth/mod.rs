@@ -52,8 +52,10 @@ impl Particles {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Wind {
     /// Direction the wind blows towards (need not be normalised; zero means no wind).
+    #[serde(deserialize_with = "crate::error::de::finite_vec")]
     pub direction: Vector,
     /// Strength `c`, a pressure in N/m².
+    #[serde(deserialize_with = "crate::error::de::non_negative")]
     pub strength: f32,
 }
 

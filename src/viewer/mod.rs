@@ -10,7 +10,7 @@ use kiss3d::prelude::*;
 use crate::cloth::{Cloth, SpringKind};
 use crate::collision::Obstacle;
 use crate::math::Vector;
-use crate::scenes::{Scene, SceneKind, SceneOptions};
+use crate::scenes::{Scene, SceneKind};
 
 /// Colour of stretch springs in the trace.
 pub const STRETCH_COLOR: Color = Color::new(0.95, 0.35, 0.25, 1.0);
@@ -143,6 +143,24 @@ fn obstacle_node(group: &mut SceneNode3d, o: &Obstacle) -> Option<SceneNode3d> {
         ));
         node.set_color(OBSTACLE_COLOR);
         return Some(wrapper);
+    } else if let Some(c) = shape.as_cylinder() {
+        group.add_cylinder(c.radius, 2.0 * c.half_height)
+    } else if let Some(c) = shape.as_cone() {
+        group.add_cone(c.radius, 2.0 * c.half_height)
+    } else if let Some(c) = shape.as_convex_polyhedron() {
+        let (vertices, indices) = c.to_trimesh();
+        let vertices = vertices
+            .into_iter()
+            .map(|v| Vec3::new(v.x, v.y, v.z))
+            .collect();
+        group.add_trimesh(vertices, indices, Vec3::ONE, true)
+    } else if let Some(m) = shape.as_trimesh() {
+        group.add_trimesh(
+            m.vertices().to_vec(),
+            m.indices().to_vec(),
+            Vec3::ONE,
+            false,
+        )
     } else {
         return None;
     };
@@ -151,8 +169,29 @@ fn obstacle_node(group: &mut SceneNode3d, o: &Obstacle) -> Option<SceneNode3d> {
     Some(node)
 }
 
-/// A camera that frames each scene.
-pub fn camera_for(kind: SceneKind) -> OrbitCamera3d {
+/// A camera that frames each scene: a chosen view for the canonical ones,
+/// and for a scene file a view over the cloth and its obstacles from the front right.
+pub fn camera_for(scene: &Scene) -> OrbitCamera3d {
+    let Some(kind) = scene.kind else {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        let points = scene.cloth.positions().iter().copied().chain(
+            scene
+                .current_obstacles()
+                .into_iter()
+                .map(|o| o.pose.translation),
+        );
+        for p in points.filter(|p| p.is_finite()) {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        if !lo.is_finite() {
+            return OrbitCamera3d::new(Vec3::new(0.7, 0.65, 0.95), Vec3::ZERO);
+        }
+        let at = (lo + hi) * 0.5 - Vec3::new(0.0, 0.15 * (hi - lo).length(), 0.0);
+        let reach = (hi - lo).length().max(0.5);
+        return OrbitCamera3d::new(at + Vec3::new(0.55, 0.45, 0.75) * reach * 1.1, at);
+    };
     let (eye, at) = match kind {
         SceneKind::Drape | SceneKind::Box => {
             (Vec3::new(0.7, 0.65, 0.95), Vec3::new(0.0, 0.05, 0.0))
@@ -277,13 +316,13 @@ impl OffscreenRenderer {
 
     /// A picture of the scene as it is now, with its camera and a caption.
     pub async fn render(&mut self, scene: &Scene) -> image::RgbImage {
-        let mut camera = camera_for(scene.kind);
+        let mut camera = camera_for(scene);
         let mut root = SceneNode3d::empty();
         add_lights(&mut root);
         let view = SceneView::new(&mut root, scene);
         let label = format!(
             "{}  |  {}  |  {}  |  {} particles  |  frame {}",
-            scene.kind.name(),
+            scene.name,
             scene.cloth.params.integrator,
             scene.cloth.material.name,
             scene.cloth.particle_count(),
@@ -305,16 +344,14 @@ impl OffscreenRenderer {
     }
 }
 
-/// Builds a scene, runs `frames` frames, renders the last one off screen (no
+/// Runs a scene `frames` frames, renders the last one off screen (no
 /// display needed) and writes it to `path` as a PNG.
 pub async fn screenshot(
-    kind: SceneKind,
-    options: &SceneOptions,
+    mut scene: Scene,
     frames: u32,
     path: &std::path::Path,
     size: (u32, u32),
 ) -> Result<(), String> {
-    let mut scene = Scene::build(kind, options).map_err(|e| e.to_string())?;
     for _ in 0..frames {
         scene.step_frame().map_err(|e| e.to_string())?;
     }

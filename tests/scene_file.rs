@@ -1,0 +1,317 @@
+//! Scene files: every canonical scene round-trips through RON to the same
+//! run, hand-written files run, and a bad file says where and what.
+
+use std::process::Command;
+
+use cloth3d::scenes::{file, Scene, SceneKind, SceneOptions};
+use proptest::prelude::*;
+
+fn cloth3d(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_cloth3d"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn example(name: &str) -> String {
+    format!("{}/examples/scenes/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn bits(scene: &Scene) -> Vec<u32> {
+    scene
+        .cloth
+        .positions()
+        .iter()
+        .chain(scene.cloth.velocities())
+        .flat_map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
+        .collect()
+}
+
+#[test]
+fn every_canonical_scene_round_trips_through_a_file_to_the_same_run() {
+    for kind in SceneKind::ALL {
+        let options = SceneOptions {
+            n: Some(10),
+            ..Default::default()
+        };
+        let desc = kind.desc(&options).unwrap();
+        let text = file::to_ron(&desc).unwrap();
+        let parsed =
+            file::from_ron(&text).unwrap_or_else(|e| panic!("{}: {e}\n{text}", kind.name()));
+        assert_eq!(parsed, desc, "{}", kind.name());
+        let mut built = Scene::build(kind, &options).unwrap();
+        let mut from_file = Scene::from_desc(parsed).unwrap();
+        assert_eq!(from_file.name, kind.name());
+        for _ in 0..40 {
+            built.step_frame().unwrap();
+            from_file.step_frame().unwrap();
+        }
+        assert_eq!(bits(&built), bits(&from_file), "{}", kind.name());
+        // The run moved something (the comparison is not of two resting cloths).
+        let start = Scene::build(kind, &options).unwrap();
+        assert_ne!(bits(&built), bits(&start), "{}", kind.name());
+    }
+}
+
+#[test]
+fn export_scene_then_run_the_file_gives_the_canonical_figures() {
+    let path = std::env::temp_dir().join(format!("cloth3d-hammock-{}.ron", std::process::id()));
+    let out = cloth3d(&[
+        "export-scene",
+        "hammock",
+        "--n",
+        "12",
+        "--output",
+        path.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(
+        text.contains("Dynamic") && text.contains("FourCorners"),
+        "{text}"
+    );
+    let run = |scene: &str, extra: &[&str]| {
+        let mut args = vec!["run", scene, "--frames", "45", "--json"];
+        args.extend_from_slice(extra);
+        let out = cloth3d(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let mut v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let obj = v.as_object_mut().unwrap();
+        obj.remove("step_wall_s");
+        obj.remove("particle_substeps_per_s");
+        v
+    };
+    let canonical = run("hammock", &["--n", "12"]);
+    let from_file = run(path.to_str().unwrap(), &[]);
+    assert_eq!(canonical, from_file);
+    assert!(canonical["bodies_max_speed"].as_f64().unwrap() > 0.0);
+    // Stdout of export-scene is the same file.
+    let out = cloth3d(&["export-scene", "hammock", "--n", "12"]);
+    assert_eq!(String::from_utf8(out.stdout).unwrap(), text);
+    let _ = std::fs::remove_file(&path);
+}
+
+#[test]
+fn hand_written_scene_files_run_from_the_command() {
+    for (name, min_frames) in [("capsule_drape.ron", 150), ("cape.ron", 180)] {
+        let out = cloth3d(&["run", &example(name), "--json"]);
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["finite"], true, "{v}");
+        assert_eq!(v["frames"], min_frames, "{v}");
+        assert!(
+            v["max_penetration_any_frame"].as_f64().unwrap() <= 0.002,
+            "{name}: {v}"
+        );
+        assert!(v["max_stretch"].as_f64().unwrap() < 0.1, "{name}: {v}");
+    }
+}
+
+#[test]
+fn the_capsule_file_drapes_the_scarf_over_the_capsule() {
+    let mut scene = file::load_scene(
+        example("capsule_drape.ron").as_ref(),
+        &SceneOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(scene.name, "capsule-drape");
+    assert_eq!(scene.cloth.material.name, "light silk");
+    assert_eq!(scene.obstacles.len(), 2);
+    let frames = scene.frames;
+    cloth3d::metrics::run(&mut scene, frames).unwrap();
+    // The capsule's top is at y = 0.42; the scarf hangs over it, its middle on top.
+    let middle = scene.cloth.positions()[12 * 48 + 24];
+    assert!((middle.y - 0.43).abs() < 0.03, "{middle}");
+    // Its ends hang down on both sides, below the capsule's axis.
+    let min_y = scene
+        .cloth
+        .positions()
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::MAX, f32::min);
+    assert!(min_y < 0.3, "{min_y}");
+}
+
+#[test]
+fn the_cape_follows_its_spinning_body() {
+    let mut scene =
+        file::load_scene(example("cape.ron").as_ref(), &SceneOptions::default()).unwrap();
+    let side = scene.rapier.as_ref().unwrap();
+    assert_eq!(side.all_bodies.len(), 2);
+    assert_eq!(side.coupling.attachments().len(), 3);
+    for _ in 0..60 {
+        scene.step_frame().unwrap();
+    }
+    let side = scene.rapier.as_ref().unwrap();
+    let body = &side.world.bodies[side.all_bodies[0]];
+    for a in side.coupling.attachments() {
+        let target = body.position().transform_point(a.local_point);
+        assert!((scene.cloth.positions()[a.particle] - target).length() < 1e-3);
+    }
+    // One second at 1 rad/s: the shoulders turned, and the cape's corner with them.
+    assert!(
+        scene.cloth.positions()[0].z > 0.3 + 0.2,
+        "{}",
+        scene.cloth.positions()[0]
+    );
+}
+
+/// The error for `text`, as the command prints it.
+fn error_of(text: &str) -> String {
+    match file::from_ron(text) {
+        Err(e) => e.to_string(),
+        Ok(desc) => match Scene::from_desc(desc) {
+            Err(e) => file::locate(e, text).to_string(),
+            Ok(_) => panic!("expected an error for\n{text}"),
+        },
+    }
+}
+
+const GOOD: &str = r#"(
+    name: "test",
+    cloth: (
+        cols: 8,
+        rows: 8,
+        placement: Horizontal(center: (0.0, 0.6, 0.0)),
+        material: Custom((
+            name: "mine",
+            stretch: (stiffness: 3000.0, damping: 1.0),
+            shear: (stiffness: 600.0, damping: 0.5),
+            bend: (stiffness: 4.0, damping: 0.05),
+            density: 0.1,
+        )),
+        pins: (preset: TwoCorners, cells: [(7, 7)]),
+    ),
+    obstacles: [
+        (shape: Ball(radius: 0.3)),
+    ],
+    frames: 10,
+)"#;
+
+#[test]
+fn a_good_file_parses() {
+    let desc = file::from_ron(GOOD).unwrap();
+    let scene = Scene::from_desc(desc).unwrap();
+    assert_eq!(scene.cloth.particle_count(), 64);
+    assert!(scene.cloth.is_pinned(63) && scene.cloth.is_pinned(0) && !scene.cloth.is_pinned(1));
+    assert_eq!(scene.frames, 10);
+}
+
+#[test]
+fn a_bad_file_names_the_line_and_the_field() {
+    let cases: [(&str, &str, usize, &str); 8] = [
+        (
+            "stiffness: 3000.0",
+            "stiffness: -3000.0",
+            9,
+            "cloth.material.Custom.stretch.stiffness",
+        ),
+        ("cols: 8", "cols: 1", 4, "cloth.cols"),
+        (
+            "radius: 0.3",
+            "radius: \"big\"",
+            17,
+            "obstacles[0].shape.Ball.radius",
+        ),
+        ("frames: 10", "frame: 10", 19, "frame"),
+        ("Horizontal(", "Sideways(", 6, "cloth.placement"),
+        ("cells: [(7, 7)]", "cells: [(7, 9)]", 14, "cloth.pins.cells"),
+        ("density: 0.1,", "", 13, "cloth.material.Custom"),
+        (
+            "(shape: Ball(radius: 0.3))",
+            "(shape: Ball(radius: 0.3)",
+            18,
+            "obstacles[0]",
+        ),
+    ];
+    for (from, to, line, field) in cases.into_iter().rev() {
+        assert!(GOOD.contains(from), "{from}");
+        let err = error_of(&GOOD.replace(from, to));
+        eprintln!("{from} -> {to}: {err}");
+        assert!(
+            err.starts_with(&format!("line {line},")),
+            "{from} -> {to}: {err}"
+        );
+        if !field.is_empty() {
+            assert!(
+                err.contains(&format!("field `{field}`")),
+                "{from} -> {to}: {err}"
+            );
+        }
+    }
+    // Unknown names say what is allowed.
+    let err = error_of(&GOOD.replace(
+        "material: Custom((",
+        "material: Preset(\"velvet\"),\n        unused: Custom((",
+    ));
+    assert!(err.contains("velvet") && err.contains("cotton"), "{err}");
+}
+
+#[test]
+fn the_command_reports_a_bad_file_with_its_path_and_exit_status_2() {
+    let path = std::env::temp_dir().join(format!("cloth3d-bad-{}.ron", std::process::id()));
+    std::fs::write(&path, GOOD.replace("stiffness: 600.0", "stiffness: 0.0")).unwrap();
+    let out = cloth3d(&["run", path.to_str().unwrap(), "--json"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty());
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains(path.to_str().unwrap())
+            && stderr.contains("line 10")
+            && stderr.contains("cloth.material.Custom.shear.stiffness"),
+        "{stderr}"
+    );
+    let out = cloth3d(&["run", "no/such/scene.ron"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/scene.ron"));
+    let _ = std::fs::remove_file(&path);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
+
+    /// Any edit of a good file (a cut, an inserted or replaced character) is
+    /// read without a panic: either a scene or an error with a line.
+    #[test]
+    fn mangled_files_never_panic(at in 0usize..GOOD.len(), len in 0usize..6, with in "[-0-9a-z(),.:\\[\\]\" ]{0,3}") {
+        let at = (0..=at).rev().find(|&i| GOOD.is_char_boundary(i)).unwrap_or(0);
+        let end = (at + len).min(GOOD.len());
+        let end = (end..=GOOD.len()).find(|&i| GOOD.is_char_boundary(i)).unwrap_or(GOOD.len());
+        let text = format!("{}{}{}", &GOOD[..at], with, &GOOD[end..]);
+        match file::from_ron(&text) {
+            Err(e) => prop_assert!(e.to_string().starts_with("line "), "{}", e),
+            Ok(desc) => {
+                if desc.cloth.cols * desc.cloth.rows <= 4096 {
+                    if let Ok(mut scene) = Scene::from_desc(desc) {
+                        let _ = scene.step_frame();
+                        prop_assert!(scene.cloth.is_finite());
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_readme_scene_file_runs() {
+    let readme = include_str!("../README.md");
+    let start = readme.find("```ron\n").expect("a RON block in the README") + 7;
+    let end = start + readme[start..].find("```").unwrap();
+    let desc = file::from_ron(&readme[start..end]).unwrap();
+    let mut scene = Scene::from_desc(desc).unwrap();
+    let m = cloth3d::metrics::run(&mut scene, 60).unwrap();
+    assert!(m.finite && m.max_penetration_any_frame <= 0.002, "{m:?}");
+}
