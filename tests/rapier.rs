@@ -217,6 +217,9 @@ fn hammock_holds_the_boxes_and_sags_under_them() {
     let m = run(&mut scene, frames).unwrap();
     assert!(m.finite);
     assert!(m.max_penetration_any_frame <= 0.002, "{m:?}");
+    // After 4 s the boxes have come to rest: none moved faster than 5 cm/s
+    // during the last frame.
+    assert!(m.bodies_max_speed.unwrap() < 0.05, "{m:?}");
     // The boxes lie on the cloth: above the ground, below the pinned height.
     let lowest_box = m.bodies_min_y.unwrap();
     assert!(lowest_box > 0.25 && lowest_box < 0.5, "{m:?}");

@@ -74,6 +74,29 @@ fn every_scene_renders_off_screen_and_shows_cloth() {
             );
         }
     }
+    // A scene file written by hand opens in the viewer too: the red silk
+    // scarf over the capsule fills part of the picture.
+    let path = format!(
+        "{}/examples/scenes/capsule_drape.ron",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut scene =
+        cloth3d::scenes::file::load_scene(path.as_ref(), &SceneOptions::default()).unwrap();
+    for _ in 0..45 {
+        scene.step_frame().unwrap();
+    }
+    let img = kiss3d::pollster::block_on(renderer.render(&scene));
+    let red = img
+        .pixels()
+        .filter(|p| {
+            let [r, g, b] = p.0.map(i32::from);
+            r > g + 40 && r > b + 40
+        })
+        .count();
+    assert!(
+        red as f64 / (w * h) as f64 > 0.01,
+        "the scene file's scarf covers only {red} pixels"
+    );
     // And an empty scene has no cloth colour at all: the check can fail.
     let blank = image::RgbImage::from_pixel(w, h, image::Rgb([40, 44, 55]));
     assert_eq!(cloth_pixels(&blank), 0);

@@ -1,7 +1,7 @@
 //! The canonical scenes of SCENES.md, built in one place for the examples,
 //! the command, the tests and the benches; and scenes of the user's own,
 //! described in the same terms ([`SceneDesc`]) and read from RON files
-//! ([`file`]).
+//! ([`mod@file`]).
 
 pub mod desc;
 pub mod file;
@@ -140,7 +140,9 @@ impl std::str::FromStr for SceneKind {
 pub struct SceneOptions {
     /// Particles along a row; rows follow the scene's aspect ratio.
     pub n: Option<usize>,
-    /// The integrator (default: symplectic Euler).
+    /// The integrator (default: the scene's, symplectic Euler but for
+    /// `hammock`'s implicit Euler); without `substeps`, it brings its own
+    /// default substeps ([`Integrator::default_substeps`]).
     pub integrator: Option<Integrator>,
     /// The material (default: cotton).
     pub material: Option<Material>,
@@ -169,6 +171,12 @@ pub struct RapierSide {
     pub all_bodies: Vec<RigidBodyHandle>,
     /// Kinematic bodies that follow a path, with the description they follow.
     pub paths: Vec<(RigidBodyHandle, BodyDesc)>,
+    /// How fast each of `bodies` moved during the last frame: the distance
+    /// its centre travelled over the frame step, in m/s. (For a body resting
+    /// in a contact that rapier keeps resolving, its stored `linvel` is not
+    /// its motion: rapier removes the position-correction velocity after
+    /// moving the body.)
+    pub last_speeds: Vec<f32>,
 }
 
 impl std::fmt::Debug for RapierSide {
@@ -216,7 +224,18 @@ impl SceneKind {
                     center: Vector::new(0.0, 1.0, 0.0),
                 },
             ),
-            SceneKind::Hammock => ClothDesc::new(cols, rows, horizontal(0.5)),
+            SceneKind::Hammock => {
+                let mut c = ClothDesc::new(cols, rows, horizontal(0.5));
+                // Hammock cotton is strongly damped along its threads (above
+                // a spring's critical damping at N = 32): with plain cotton's
+                // damping the boxes bob for many seconds.
+                let mut m = Material::cotton();
+                m.name = "damped cotton".into();
+                m.stretch.damping = 3.0;
+                m.shear.damping = 3.0;
+                c.material = MaterialDesc::Custom(m);
+                c
+            }
         };
         cloth.pins = PinsDesc::preset(match self {
             SceneKind::Flag => PinPreset::FlagColumn,
@@ -228,6 +247,13 @@ impl SceneKind {
         let mut desc = SceneDesc::new(self.name(), cloth);
         desc.description = self.description().to_string();
         desc.frames = self.default_frames();
+        if self == SceneKind::Hammock {
+            // Strong damping is what the implicit integrator is for; four
+            // substeps keep the boxes' landing from stretching the cloth
+            // through them (the boxes' contacts are not constraints of its solve).
+            desc.integrator = Integrator::ImplicitEuler;
+            desc.substeps = Substeps::Fixed(4);
+        }
         match self {
             SceneKind::Drape => desc.obstacles.push(ObstacleDesc::fixed(
                 ShapeDesc::Ball { radius: 0.3 },
@@ -320,6 +346,10 @@ impl SceneDesc {
         }
         if let Some(i) = options.integrator {
             self.integrator = i;
+            if options.substeps.is_none() {
+                // The scene's substeps were chosen for its own integrator.
+                self.substeps = i.default_substeps();
+            }
         }
         if let Some(m) = &options.material {
             self.cloth.material = MaterialDesc::of(m);
@@ -510,11 +540,28 @@ impl Scene {
                         rb.set_next_kinematic_translation(at);
                     }
                 }
+                let before: Vec<Vector> = side
+                    .bodies
+                    .iter()
+                    .map(|h| {
+                        side.world
+                            .bodies
+                            .get(*h)
+                            .map_or(Vector::ZERO, |b| b.translation())
+                    })
+                    .collect();
                 let report = side
                     .coupling
                     .step_world(&mut self.cloth, &mut side.world)?
                     .step;
                 side.world.step();
+                side.last_speeds.clear();
+                for (h, start) in side.bodies.iter().zip(before) {
+                    if let Some(b) = side.world.bodies.get(*h) {
+                        side.last_speeds
+                            .push((b.translation() - start).length() / self.dt);
+                    }
+                }
                 report
             }
         };
@@ -613,5 +660,6 @@ fn rapier_side(
         bodies,
         all_bodies,
         paths,
+        last_speeds: Vec::new(),
     })
 }

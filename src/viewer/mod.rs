@@ -175,12 +175,18 @@ pub fn camera_for(scene: &Scene) -> OrbitCamera3d {
     let Some(kind) = scene.kind else {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        let points = scene.cloth.positions().iter().copied().chain(
-            scene
-                .current_obstacles()
-                .into_iter()
-                .map(|o| o.pose.translation),
-        );
+        let boxes: Vec<_> = scene
+            .current_obstacles()
+            .iter()
+            .map(|o| o.shape.compute_aabb(&o.pose))
+            .filter(|b| (b.maxs - b.mins).max_element() < 100.0)
+            .collect();
+        let points = scene
+            .cloth
+            .positions()
+            .iter()
+            .copied()
+            .chain(boxes.iter().flat_map(|b| [b.mins, b.maxs]));
         for p in points.filter(|p| p.is_finite()) {
             lo = lo.min(p);
             hi = hi.max(p);
@@ -188,7 +194,9 @@ pub fn camera_for(scene: &Scene) -> OrbitCamera3d {
         if !lo.is_finite() {
             return OrbitCamera3d::new(Vec3::new(0.7, 0.65, 0.95), Vec3::ZERO);
         }
-        let at = (lo + hi) * 0.5 - Vec3::new(0.0, 0.15 * (hi - lo).length(), 0.0);
+        // The cloth falls: look below the middle of where it starts.
+        let mut at = (lo + hi) * 0.5;
+        at.y = lo.y + 0.35 * (hi.y - lo.y);
         let reach = (hi - lo).length().max(0.5);
         return OrbitCamera3d::new(at + Vec3::new(0.55, 0.45, 0.75) * reach * 1.1, at);
     };
