@@ -95,7 +95,7 @@ pub enum ClothError {
     },
     /// The state stopped being finite during a step; the cloth was restored to
     /// its state before the step.
-    #[error("the {integrator} integrator diverged at dt = {dt} s with {substeps} substeps (state restored to before the step); try --substeps {suggested_substeps} or a larger value, or an implicit integrator (implicit-euler, fast-mass-spring)")]
+    #[error("the {integrator} integrator diverged at dt = {dt} s with {substeps} substeps (state restored to before the step); try --substeps {suggested_substeps} or a larger value{}", implicit_advice(integrator))]
     Diverged {
         /// Name of the integrator that diverged.
         integrator: &'static str,
@@ -148,6 +148,15 @@ pub enum ClothError {
         /// The system's message.
         message: String,
     },
+}
+
+/// For an explicit integrator, the advice to switch to an implicit one.
+fn implicit_advice(integrator: &str) -> &'static str {
+    if integrator == "implicit-euler" || integrator == "fast-mass-spring" {
+        ""
+    } else {
+        ", or an implicit integrator (implicit-euler, fast-mass-spring)"
+    }
 }
 
 fn field_suffix(field: &str) -> String {

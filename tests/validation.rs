@@ -161,3 +161,23 @@ fn from_parts_checks_every_index() {
     assert!(mk(vec![], vec![], vec![1.0, 0.0]).is_err());
     assert!(mk(vec![spring(0, 1, 1.0)], vec![], vec![1.0, 2.0]).is_ok());
 }
+
+#[test]
+fn divergence_advice_fits_the_integrator() {
+    let err = |integrator| ClothError::Diverged {
+        integrator,
+        dt: 1.0 / 60.0,
+        substeps: 1,
+        suggested_substeps: 4,
+    };
+    let explicit = err("symplectic-euler").to_string();
+    assert!(
+        explicit.contains("--substeps 4") && explicit.contains("implicit-euler, fast-mass-spring"),
+        "{explicit}"
+    );
+    let implicit = err("implicit-euler").to_string();
+    assert!(
+        implicit.contains("--substeps 4") && !implicit.contains("fast-mass-spring"),
+        "{implicit}"
+    );
+}
