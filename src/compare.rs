@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::ClothError;
 use crate::integrators::Integrator;
 use crate::plot::{draw, Curve, Panel};
-use crate::scenes::{Scene, SceneKind, SceneOptions};
+use crate::scenes::{Scene, SceneDesc, SceneKind, SceneOptions};
 
 /// How one integrator did.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -42,16 +42,20 @@ pub fn compare(
     options: &SceneOptions,
     frames: u32,
 ) -> Result<Vec<Comparison>, ClothError> {
+    compare_desc(&kind.desc(options)?, frames)
+}
+
+/// [`compare`] on any scene description (a scene file's, for one).
+pub fn compare_desc(desc: &SceneDesc, frames: u32) -> Result<Vec<Comparison>, ClothError> {
     let mut rows = Vec::new();
     for integrator in Integrator::ALL {
-        let mut scene = Scene::build(
-            kind,
-            &SceneOptions {
-                integrator: Some(integrator),
-                substeps: Some(integrator.default_substeps()),
-                ..options.clone()
-            },
-        )?;
+        let mut desc = desc.clone();
+        desc.apply(&SceneOptions {
+            integrator: Some(integrator),
+            substeps: Some(integrator.default_substeps()),
+            ..Default::default()
+        })?;
+        let mut scene = Scene::from_desc(desc)?;
         let start_energy = scene.cloth.energy().total();
         let mut row = Comparison {
             integrator: integrator.name().into(),

@@ -315,3 +315,33 @@ fn the_readme_scene_file_runs() {
     let m = cloth3d::metrics::run(&mut scene, 60).unwrap();
     assert!(m.finite && m.max_penetration_any_frame <= 0.002, "{m:?}");
 }
+
+#[test]
+fn compare_takes_a_scene_file() {
+    let plot =
+        std::env::temp_dir().join(format!("cloth3d-compare-file-{}.png", std::process::id()));
+    let out = cloth3d(&[
+        "compare",
+        &example("capsule_drape.ron"),
+        "--n",
+        "12",
+        "--frames",
+        "15",
+        "--json",
+        "--plot",
+        plot.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let rows: Vec<serde_json::Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(rows.len(), 6, "{stdout}");
+    assert!(rows.iter().all(|r| r["stable"] == true), "{stdout}");
+    let _ = std::fs::remove_file(&plot);
+}

@@ -91,9 +91,8 @@ impl SceneArgs {
 
 #[derive(clap::Args)]
 struct CompareArgs {
-    /// Scene name.
-    #[arg(value_parser = parse_scene)]
-    scene: SceneKind,
+    /// Scene name, or path to a RON scene file.
+    scene: String,
     /// Particles along a row.
     #[arg(long, value_parser = parse_n, allow_hyphen_values = true)]
     n: Option<usize>,
@@ -492,14 +491,21 @@ fn run_command(args: RunArgs) -> ExitCode {
 }
 
 fn compare_command(args: CompareArgs) -> ExitCode {
-    use cloth3d::compare::{compare, plot, COLORS};
+    use cloth3d::compare::{compare_desc, plot, COLORS};
     let options = SceneOptions {
         n: args.n,
         dt: args.dt,
         ..Default::default()
     };
-    let frames = args.frames.unwrap_or(args.scene.default_frames());
-    let rows = match compare(args.scene, &options, frames) {
+    let desc = match SceneKind::from_name(&args.scene) {
+        Ok(kind) => kind.desc(&options).map_err(|e| e.to_string()),
+        Err(_) => load_scene(&args.scene, &options).map(|s| s.desc),
+    };
+    let rows = desc.and_then(|desc| {
+        let frames = args.frames.unwrap_or(desc.frames);
+        compare_desc(&desc, frames).map_err(|e| e.to_string())
+    });
+    let rows = match rows {
         Ok(rows) => rows,
         Err(e) => {
             eprintln!("error: {e}");
