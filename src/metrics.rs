@@ -68,6 +68,12 @@ pub struct RunMetrics {
     /// Fastest the scene's moving rapier bodies moved during the final frame,
     /// in m/s: distance travelled over the frame step (`curtain`, `hammock`).
     pub bodies_max_speed: Option<f32>,
+    /// Largest rapier `linvel` of the scene's moving bodies after the final
+    /// frame, in m/s. For a body resting in a contact rapier keeps resolving
+    /// (the hammock's boxes lean on each other) it is not the body's motion:
+    /// rapier moves the body with a position-correction velocity that it
+    /// removes from `linvel` afterwards.
+    pub bodies_max_linvel: Option<f32>,
     /// Lowest centre height of the scene's rapier bodies on the final frame, in metres.
     pub bodies_min_y: Option<f32>,
     /// Wall time spent stepping, in seconds.
@@ -138,6 +144,13 @@ pub fn run_with(
             .rapier
             .as_ref()
             .map(|side| side.last_speeds.iter().copied().fold(0.0, f32::max)),
+        bodies_max_linvel: scene.rapier.as_ref().map(|side| {
+            side.bodies
+                .iter()
+                .filter_map(|h| side.world.bodies.get(*h))
+                .map(|b| b.linvel().length())
+                .fold(0.0, f32::max)
+        }),
         bodies_min_y: scene.rapier.as_ref().map(|side| {
             side.bodies
                 .iter()
