@@ -14,55 +14,16 @@
 //! select it · X pin/unpin it · Ctrl+drag to pull it · H help.
 
 use cloth3d::prelude::*;
-use cloth3d::scenes::{file, Scene, SceneKind, SceneOptions};
+use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
 use cloth3d::viewer::{self, SceneView, TraceMode};
 use kiss3d::egui;
 use kiss3d::prelude::*;
 
-/// Where the scene on screen comes from.
-#[derive(Debug, Clone, PartialEq)]
-enum Source {
-    Canonical(SceneKind),
-    File(std::path::PathBuf),
-}
-
-impl Source {
-    fn parse(name: &str) -> Result<Source, String> {
-        if let Ok(kind) = SceneKind::from_name(name) {
-            return Ok(Source::Canonical(kind));
-        }
-        let path = std::path::PathBuf::from(name);
-        if path.exists() {
-            Ok(Source::File(path))
-        } else {
-            Err(format!(
-                "unknown scene '{name}': valid choices are {}, or the path of a .ron scene file",
-                SceneKind::ALL.map(|s| s.name()).join(", ")
-            ))
-        }
-    }
-
-    fn build(&self, options: &SceneOptions) -> Result<Scene, String> {
-        match self {
-            Source::Canonical(kind) => Scene::build(*kind, options).map_err(|e| e.to_string()),
-            Source::File(path) => {
-                file::load_scene(path, options).map_err(|e| format!("{}: {e}", path.display()))
-            }
-        }
-    }
-
-    fn variants(&self) -> &'static [PinPreset] {
-        match self {
-            Source::Canonical(kind) => kind.variants(),
-            Source::File(_) => &[],
-        }
-    }
-}
-
 struct Args {
     screenshot: Option<String>,
     frames: u32,
-    scene: Source,
+    /// A canonical scene's name or a scene file's path.
+    scene: String,
     options: SceneOptions,
     size: (u32, u32),
 }
@@ -71,7 +32,7 @@ fn parse_args() -> Result<Args, String> {
     let mut args = Args {
         screenshot: None,
         frames: 120,
-        scene: Source::Canonical(SceneKind::Drape),
+        scene: SceneKind::Drape.name().to_string(),
         options: SceneOptions::default(),
         size: (1280, 720),
     };
@@ -85,7 +46,7 @@ fn parse_args() -> Result<Args, String> {
                     .parse()
                     .map_err(|_| "--frames takes a whole number".to_string())?
             }
-            "--scene" => args.scene = Source::parse(&value()?)?,
+            "--scene" => args.scene = value()?,
             "--integrator" => {
                 args.options.integrator =
                     Some(Integrator::from_name(&value()?).map_err(|e| e.to_string())?)
@@ -129,7 +90,7 @@ async fn main() {
         }
     };
     if let Some(path) = &args.screenshot {
-        let scene = match args.scene.build(&args.options) {
+        let scene = match Scene::open(&args.scene, &args.options) {
             Ok(s) => s,
             Err(e) => {
                 eprintln!("error: {e}");
@@ -150,7 +111,8 @@ async fn main() {
 
 /// Everything the window shows and the keys change.
 struct Showcase {
-    kind: Source,
+    /// What is on screen: a canonical scene's name or a scene file's path.
+    source: String,
     options: SceneOptions,
     scene: Scene,
     view: SceneView,
@@ -171,27 +133,27 @@ struct Showcase {
 impl Showcase {
     fn load(
         root: &mut SceneNode3d,
-        kind: &Source,
+        source: &str,
         options: SceneOptions,
-    ) -> Result<(Scene, SceneView), String> {
-        let scene = kind.build(&options)?;
+    ) -> Result<(Scene, SceneView), ClothError> {
+        let scene = Scene::open(source, &options)?;
         let view = SceneView::new(root, &scene);
         Ok((scene, view))
     }
 
-    fn switch(&mut self, root: &mut SceneNode3d, kind: Source, keep_camera: bool) {
-        if kind != self.kind {
+    fn switch(&mut self, root: &mut SceneNode3d, source: String, keep_camera: bool) {
+        if source != self.source {
             self.options.variant = None;
         }
-        match Self::load(root, &kind, self.options.clone()) {
+        match Self::load(root, &source, self.options.clone()) {
             Ok((scene, view)) => {
                 let old = std::mem::replace(&mut self.view, view);
                 old.remove();
                 self.scene = scene;
-                if !keep_camera || kind != self.kind {
+                if !keep_camera || source != self.source {
                     self.camera = viewer::camera_for(&self.scene);
                 }
-                self.kind = kind;
+                self.source = source;
                 self.selected = None;
                 self.pins = None;
                 self.dragging = None;
@@ -221,7 +183,7 @@ async fn interactive(args: Args) {
         }
     };
     let mut app = Showcase {
-        kind: args.scene,
+        source: args.scene,
         options: args.options,
         wind_on: !scene.cloth.params.wind.is_calm(),
         camera: viewer::camera_for(&scene),
@@ -291,7 +253,7 @@ async fn interactive(args: Args) {
                     .iter()
                     .position(|k| *k == key);
                     if let Some(s) = scene_key {
-                        app.switch(&mut root, Source::Canonical(kinds[s]), false);
+                        app.switch(&mut root, kinds[s].name().to_string(), false);
                         continue;
                     }
                     match key {
@@ -300,7 +262,7 @@ async fn interactive(args: Args) {
                             app.paused = true;
                             step_once = true;
                         }
-                        Key::R => app.switch(&mut root, app.kind.clone(), true),
+                        Key::R => app.switch(&mut root, app.source.clone(), true),
                         Key::T => app.trace = app.trace.next(),
                         Key::H => app.help = !app.help,
                         Key::W => {
@@ -333,7 +295,8 @@ async fn interactive(args: Args) {
                             }
                         }
                         Key::P => {
-                            if app.kind.variants().is_empty() {
+                            let variants = app.scene.kind.map_or(&[][..], |k| k.variants());
+                            if variants.is_empty() {
                                 // Scenes without variants: change the pins of the cloth on screen.
                                 let current = app.pins.unwrap_or(PinPreset::None);
                                 let next = next_in(&PinPreset::ALL, current);
@@ -341,10 +304,9 @@ async fn interactive(args: Args) {
                                 app.pins = Some(next);
                                 app.message = format!("pins: {}", next.name());
                             } else {
-                                let presets = app.kind.variants();
-                                let current = app.options.variant.unwrap_or(presets[0]);
-                                app.options.variant = Some(next_in(presets, current));
-                                app.switch(&mut root, app.kind.clone(), true);
+                                let current = app.options.variant.unwrap_or(variants[0]);
+                                app.options.variant = Some(next_in(variants, current));
+                                app.switch(&mut root, app.source.clone(), true);
                             }
                         }
                         Key::X => {

@@ -128,8 +128,14 @@ pub enum ClothError {
     #[error("linear solver failed: {0}")]
     Solver(String),
     /// A scene file could not be read: where, which field, and why.
-    #[error("line {line}, column {column}{}: {message}", field_suffix(field))]
+    #[error(
+        "{}line {line}, column {column}{}: {message}",
+        path_prefix(path),
+        field_suffix(field)
+    )]
     SceneFile {
+        /// The file (empty when the scene was read from text).
+        path: String,
         /// Line of the error, counted from 1 (0 when it has no place in the text).
         line: usize,
         /// Column of the error, counted from 1.
@@ -156,6 +162,14 @@ fn implicit_advice(integrator: &str) -> &'static str {
         ""
     } else {
         ", or an implicit integrator (implicit-euler, fast-mass-spring)"
+    }
+}
+
+fn path_prefix(path: &str) -> String {
+    if path.is_empty() {
+        String::new()
+    } else {
+        format!("{path}: ")
     }
 }
 

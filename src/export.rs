@@ -57,9 +57,8 @@ pub struct Animation {
 }
 
 impl Animation {
-    /// An empty recording of `cloth`, frames `dt` seconds apart.
-    pub fn new(cloth: &Cloth, dt: f32) -> Self {
-        let _ = cloth;
+    /// An empty recording, frames `dt` seconds apart.
+    pub fn new(dt: f32) -> Self {
         Self {
             dt,
             positions: Vec::new(),
@@ -148,7 +147,7 @@ impl Animation {
 /// normals, texture coordinates, triangles and a double-sided material of
 /// the cloth's colour.
 pub fn glb(cloth: &Cloth) -> Vec<u8> {
-    Animation::new(cloth, 0.0).to_glb(cloth)
+    Animation::new(0.0).to_glb(cloth)
 }
 
 /// Writes [`glb`] of the cloth to `path`.

@@ -86,14 +86,15 @@ pub struct RunMetrics {
 ///
 /// A diverging step ends the run with its error; the scene keeps its last finite state.
 pub fn run(scene: &mut Scene, frames: u32) -> Result<RunMetrics, ClothError> {
-    run_with(scene, frames, |_, _| {})
+    run_with(scene, frames, |_, _, _| {})
 }
 
-/// Like [`run`], calling `on_frame(scene, frame)` after every frame.
+/// Like [`run`], calling `on_frame(scene, frame, max_penetration)` after
+/// every frame, with the frame's [`Scene::max_penetration`] (metres).
 pub fn run_with(
     scene: &mut Scene,
     frames: u32,
-    mut on_frame: impl FnMut(&Scene, u32),
+    mut on_frame: impl FnMut(&Scene, u32, f32),
 ) -> Result<RunMetrics, ClothError> {
     let mut wall = 0.0f64;
     let mut substeps_total = 0u64;
@@ -107,8 +108,9 @@ pub fn run_with(
         substeps_total += report.substeps as u64;
         max_substeps = max_substeps.max(report.substeps);
         iterations += report.iterations as u64;
-        deepest_any = deepest_any.max(scene.max_penetration());
-        on_frame(scene, f);
+        let deepest = scene.max_penetration();
+        deepest_any = deepest_any.max(deepest);
+        on_frame(scene, f, deepest);
     }
     let cloth = &scene.cloth;
     let grid = cloth
@@ -181,12 +183,13 @@ pub struct Series {
 }
 
 impl Series {
-    /// Records the scene as it is now.
-    pub fn push(&mut self, scene: &Scene) {
+    /// Records the scene as it is now, whose deepest particle lies
+    /// `max_penetration` metres inside an obstacle ([`Scene::max_penetration`]).
+    pub fn push(&mut self, scene: &Scene, max_penetration: f32) {
         self.time.push(scene.frame as f64 * scene.dt as f64);
         self.energy.push(scene.cloth.energy().total());
         self.max_stretch.push(max_stretch(&scene.cloth) as f64);
-        self.max_penetration.push(scene.max_penetration() as f64);
+        self.max_penetration.push(max_penetration as f64);
     }
 
     /// Frames recorded.

@@ -174,22 +174,6 @@ struct RunArgs {
     json: bool,
 }
 
-/// A canonical scene by name, or a scene file.
-fn load_scene(name: &str, options: &SceneOptions) -> Result<Scene, String> {
-    if let Ok(kind) = SceneKind::from_name(name) {
-        return Scene::build(kind, options).map_err(|e| e.to_string());
-    }
-    let path = std::path::Path::new(name);
-    if path.exists() || name.ends_with(".ron") {
-        return cloth3d::scenes::file::load_scene(path, options)
-            .map_err(|e| format!("{}: {e}", path.display()));
-    }
-    Err(format!(
-        "unknown scene '{name}': valid choices are {}, or the path of a .ron scene file",
-        SceneKind::ALL.map(|s| s.name()).join(", ")
-    ))
-}
-
 fn parse_scene(s: &str) -> Result<SceneKind, String> {
     SceneKind::from_name(s).map_err(|e| e.to_string())
 }
@@ -359,11 +343,7 @@ fn list() {
 
 fn export_scene_command(args: ExportSceneArgs) -> ExitCode {
     let options = args.options.options();
-    let desc = match SceneKind::from_name(&args.scene) {
-        Ok(kind) => kind.desc(&options).map_err(|e| e.to_string()),
-        Err(_) => load_scene(&args.scene, &options).map(|s| s.desc),
-    };
-    let text = match desc.and_then(|d| file::to_ron(&d).map_err(|e| e.to_string())) {
+    let text = match Scene::open(&args.scene, &options).and_then(|s| file::to_ron(&s.desc)) {
         Ok(t) => t,
         Err(e) => {
             eprintln!("error: {e}");
@@ -401,7 +381,7 @@ fn progress_bar(frames: u32, quiet: bool, name: &str) -> indicatif::ProgressBar 
 
 fn run_command(args: RunArgs) -> ExitCode {
     let options = args.options.options();
-    let mut scene = match load_scene(&args.scene, &options) {
+    let mut scene = match Scene::open(&args.scene, &options) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
@@ -432,10 +412,10 @@ fn run_command(args: RunArgs) -> ExitCode {
     let mut animation = args
         .export_glb
         .as_ref()
-        .map(|_| cloth3d::export::Animation::new(&scene.cloth, scene.dt));
+        .map(|_| cloth3d::export::Animation::new(scene.dt));
     let mut series = cloth3d::metrics::Series::default();
     let bar = progress_bar(frames, args.quiet, &scene.name);
-    let result = run_with(&mut scene, frames, |scene, frame| {
+    let result = run_with(&mut scene, frames, |scene, frame, max_penetration| {
         bar.inc(1);
         if let (Some(dir), None) = (&args.export_obj, &export_error) {
             let path = dir.join(format!("frame_{:04}.obj", frame + 1));
@@ -447,7 +427,7 @@ fn run_command(args: RunArgs) -> ExitCode {
             anim.push(&scene.cloth);
         }
         if args.plot.is_some() {
-            series.push(scene);
+            series.push(scene, max_penetration);
         }
     });
     bar.finish_and_clear();
@@ -497,13 +477,9 @@ fn compare_command(args: CompareArgs) -> ExitCode {
         dt: args.dt,
         ..Default::default()
     };
-    let desc = match SceneKind::from_name(&args.scene) {
-        Ok(kind) => kind.desc(&options).map_err(|e| e.to_string()),
-        Err(_) => load_scene(&args.scene, &options).map(|s| s.desc),
-    };
-    let rows = desc.and_then(|desc| {
-        let frames = args.frames.unwrap_or(desc.frames);
-        compare_desc(&desc, frames).map_err(|e| e.to_string())
+    let rows = Scene::open(&args.scene, &options).and_then(|scene| {
+        let frames = args.frames.unwrap_or(scene.frames);
+        compare_desc(&scene.desc, frames)
     });
     let rows = match rows {
         Ok(rows) => rows,

@@ -58,6 +58,7 @@ pub fn to_ron(desc: &SceneDesc) -> Result<String, ClothError> {
         .depth_limit(6)
         .separate_tuple_members(false);
     let mut text = ron::ser::to_string_pretty(desc, config).map_err(|e| ClothError::SceneFile {
+        path: String::new(),
         line: 0,
         column: 0,
         field: String::new(),
@@ -67,25 +68,45 @@ pub fn to_ron(desc: &SceneDesc) -> Result<String, ClothError> {
     Ok(text)
 }
 
-/// Reads a scene file.
+/// Reads a scene file. Errors name the file, line, column and field.
 pub fn load(path: &Path) -> Result<SceneDesc, ClothError> {
-    let text = std::fs::read_to_string(path).map_err(|e| ClothError::Io {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    })?;
-    from_ron(&text)
+    from_ron(&read(path)?).map_err(|e| in_file(e, path))
 }
 
 /// Reads a scene file, applies `options` and builds the scene. Every error
-/// that comes from the file names its line and field.
+/// that comes from the file names the file, its line and field.
 pub fn load_scene(path: &Path, options: &SceneOptions) -> Result<Scene, ClothError> {
-    let text = std::fs::read_to_string(path).map_err(|e| ClothError::Io {
+    let text = read(path)?;
+    let mut desc = from_ron(&text).map_err(|e| in_file(e, path))?;
+    desc.apply(options)?;
+    Scene::from_desc(desc).map_err(|e| in_file(locate(e, &text), path))
+}
+
+fn read(path: &Path) -> Result<String, ClothError> {
+    std::fs::read_to_string(path).map_err(|e| ClothError::Io {
         path: path.display().to_string(),
         message: e.to_string(),
-    })?;
-    let mut desc = from_ron(&text)?;
-    desc.apply(options)?;
-    Scene::from_desc(desc).map_err(|e| locate(e, &text))
+    })
+}
+
+/// Names `path` in a scene-file error.
+fn in_file(err: ClothError, path: &Path) -> ClothError {
+    match err {
+        ClothError::SceneFile {
+            line,
+            column,
+            field,
+            message,
+            ..
+        } => ClothError::SceneFile {
+            path: path.display().to_string(),
+            line,
+            column,
+            field,
+            message,
+        },
+        other => other,
+    }
 }
 
 /// Places an error found while building a parsed scene (which names its
@@ -93,6 +114,7 @@ pub fn load_scene(path: &Path, options: &SceneOptions) -> Result<Scene, ClothErr
 pub fn locate(err: ClothError, text: &str) -> ClothError {
     match err {
         ClothError::SceneFile {
+            path,
             line: 0,
             field,
             message,
@@ -100,6 +122,7 @@ pub fn locate(err: ClothError, text: &str) -> ClothError {
         } if !field.is_empty() => {
             let (line, column) = find_field(text, &field).unwrap_or((0, 0));
             ClothError::SceneFile {
+                path,
                 line,
                 column,
                 field,
@@ -139,6 +162,7 @@ fn find_field(text: &str, field: &str) -> Option<(usize, usize)> {
 
 fn spanned(e: ron::error::SpannedError, field: String) -> ClothError {
     ClothError::SceneFile {
+        path: String::new(),
         line: e.span.start.line,
         column: e.span.start.col,
         field,

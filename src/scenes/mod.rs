@@ -403,6 +403,7 @@ pub struct Scene {
 
 fn field_error(field: impl Into<String>, err: impl std::fmt::Display) -> ClothError {
     ClothError::SceneFile {
+        path: String::new(),
         line: 0,
         column: 0,
         field: field.into(),
@@ -413,11 +414,33 @@ fn field_error(field: impl Into<String>, err: impl std::fmt::Display) -> ClothEr
 impl Scene {
     /// Builds a canonical scene with the given options.
     pub fn build(kind: SceneKind, options: &SceneOptions) -> Result<Scene, ClothError> {
-        let variant = kind.check_variant(options.variant)?;
-        let mut scene = Scene::from_desc(kind.desc(options)?)?;
+        let desc = kind.desc(options)?;
+        // The scenes with variants pin their cloth with the chosen one.
+        let variant = (!kind.variants().is_empty()).then_some(desc.cloth.pins.preset);
+        let mut scene = Scene::from_desc(desc)?;
         scene.kind = Some(kind);
         scene.variant = variant;
         Ok(scene)
+    }
+
+    /// A canonical scene by name, or else a RON scene file by path (see
+    /// [`file::load_scene`]), with `options` applied.
+    pub fn open(name_or_path: &str, options: &SceneOptions) -> Result<Scene, ClothError> {
+        if let Ok(kind) = SceneKind::from_name(name_or_path) {
+            return Scene::build(kind, options);
+        }
+        let path = std::path::Path::new(name_or_path);
+        if path.exists() || name_or_path.ends_with(".ron") {
+            return file::load_scene(path, options);
+        }
+        Err(ClothError::UnknownName {
+            what: "scene",
+            name: name_or_path.to_string(),
+            valid: format!(
+                "{}, or the path of a .ron scene file",
+                SceneKind::ALL.map(|s| s.name()).join(", ")
+            ),
+        })
     }
 
     /// Builds a scene from its description (a scene file's, or a canonical one's).
