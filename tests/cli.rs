@@ -1,23 +1,12 @@
 //! The `cloth3d` command: metrics as JSON, one-line errors with exit status 2.
 
-use std::process::Command;
+mod common;
 
-fn cloth3d(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_cloth3d"))
-        .args(args)
-        .output()
-        .unwrap()
-}
+use common::{cloth3d, cloth3d_ok};
 
 #[test]
 fn run_json_prints_exactly_one_object_with_every_metric() {
-    let out = cloth3d(&["run", "drape", "--n", "16", "--frames", "30", "--json"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stdout = String::from_utf8(out.stdout).unwrap();
+    let stdout = cloth3d_ok(&["run", "drape", "--n", "16", "--frames", "30", "--json"]);
     assert_eq!(stdout.trim().lines().count(), 1, "{stdout}");
     let v: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
     for key in [
@@ -46,7 +35,7 @@ fn run_json_prints_exactly_one_object_with_every_metric() {
 
 #[test]
 fn run_prints_a_table_by_default() {
-    let out = cloth3d(&[
+    let stdout = cloth3d_ok(&[
         "run",
         "pins",
         "--variant",
@@ -58,8 +47,6 @@ fn run_prints_a_table_by_default() {
         "--material",
         "denim",
     ]);
-    assert!(out.status.success());
-    let stdout = String::from_utf8(out.stdout).unwrap();
     assert!(
         stdout.contains("pins (four)") && stdout.contains("rk4") && stdout.contains("denim"),
         "{stdout}"
@@ -69,9 +56,7 @@ fn run_prints_a_table_by_default() {
 
 #[test]
 fn list_names_every_choice() {
-    let out = cloth3d(&["list"]);
-    assert!(out.status.success());
-    let stdout = String::from_utf8(out.stdout).unwrap();
+    let stdout = cloth3d_ok(&["list"]);
     for name in [
         "drape",
         "box",
@@ -144,7 +129,7 @@ fn a_diverging_run_says_so_on_one_line_and_exits_1() {
 #[test]
 fn compare_runs_every_integrator_and_writes_a_plot() {
     let plot = std::env::temp_dir().join(format!("cloth3d-compare-{}.png", std::process::id()));
-    let out = cloth3d(&[
+    let stdout = cloth3d_ok(&[
         "compare",
         "pins",
         "--n",
@@ -155,12 +140,6 @@ fn compare_runs_every_integrator_and_writes_a_plot() {
         "--plot",
         plot.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stdout = String::from_utf8(out.stdout).unwrap();
     let rows: Vec<serde_json::Value> = stdout
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())
@@ -190,7 +169,7 @@ fn compare_runs_every_integrator_and_writes_a_plot() {
 #[test]
 fn export_obj_writes_one_mesh_per_frame_that_parses_back() {
     let dir = std::env::temp_dir().join(format!("cloth3d-obj-{}", std::process::id()));
-    let out = cloth3d(&[
+    let stdout = cloth3d_ok(&[
         "run",
         "pins",
         "--n",
@@ -201,12 +180,6 @@ fn export_obj_writes_one_mesh_per_frame_that_parses_back() {
         "--export-obj",
         dir.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stdout = String::from_utf8(out.stdout).unwrap();
     assert_eq!(
         stdout.trim().lines().count(),
         1,

@@ -1,17 +1,12 @@
 //! Scene files: every canonical scene round-trips through RON to the same
 //! run, hand-written files run, and a bad file says where and what.
 
-use std::process::Command;
+mod common;
+
+use common::{cloth3d, cloth3d_ok};
 
 use cloth3d::scenes::{file, Scene, SceneKind, SceneOptions};
 use proptest::prelude::*;
-
-fn cloth3d(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_cloth3d"))
-        .args(args)
-        .output()
-        .unwrap()
-}
 
 fn example(name: &str) -> String {
     format!("{}/examples/scenes/{name}", env!("CARGO_MANIFEST_DIR"))
@@ -56,7 +51,7 @@ fn every_canonical_scene_round_trips_through_a_file_to_the_same_run() {
 #[test]
 fn export_scene_then_run_the_file_gives_the_canonical_figures() {
     let path = std::env::temp_dir().join(format!("cloth3d-hammock-{}.ron", std::process::id()));
-    let out = cloth3d(&[
+    cloth3d_ok(&[
         "export-scene",
         "hammock",
         "--n",
@@ -64,11 +59,6 @@ fn export_scene_then_run_the_file_gives_the_canonical_figures() {
         "--output",
         path.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let text = std::fs::read_to_string(&path).unwrap();
     assert!(
         text.contains("Dynamic") && text.contains("FourCorners"),
@@ -77,13 +67,8 @@ fn export_scene_then_run_the_file_gives_the_canonical_figures() {
     let run = |scene: &str, extra: &[&str]| {
         let mut args = vec!["run", scene, "--frames", "45", "--json"];
         args.extend_from_slice(extra);
-        let out = cloth3d(&args);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let mut v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let stdout = cloth3d_ok(&args);
+        let mut v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
         let obj = v.as_object_mut().unwrap();
         obj.remove("step_wall_s");
         obj.remove("particle_substeps_per_s");
@@ -94,21 +79,15 @@ fn export_scene_then_run_the_file_gives_the_canonical_figures() {
     assert_eq!(canonical, from_file);
     assert!(canonical["bodies_max_speed"].as_f64().unwrap() > 0.0);
     // Stdout of export-scene is the same file.
-    let out = cloth3d(&["export-scene", "hammock", "--n", "12"]);
-    assert_eq!(String::from_utf8(out.stdout).unwrap(), text);
+    assert_eq!(cloth3d_ok(&["export-scene", "hammock", "--n", "12"]), text);
     let _ = std::fs::remove_file(&path);
 }
 
 #[test]
 fn hand_written_scene_files_run_from_the_command() {
     for (name, min_frames) in [("capsule_drape.ron", 150), ("cape.ron", 180)] {
-        let out = cloth3d(&["run", &example(name), "--json"]);
-        assert!(
-            out.status.success(),
-            "{name}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let stdout = cloth3d_ok(&["run", &example(name), "--json"]);
+        let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
         assert_eq!(v["finite"], true, "{v}");
         assert_eq!(v["frames"], min_frames, "{v}");
         assert!(
@@ -276,7 +255,8 @@ fn the_command_reports_a_bad_file_with_its_path_and_exit_status_2() {
     );
     let out = cloth3d(&["run", "no/such/scene.ron"]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/scene.ron"));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(stderr.matches("no/such/scene.ron").count(), 1, "{stderr}");
     let _ = std::fs::remove_file(&path);
 }
 
@@ -320,7 +300,7 @@ fn the_readme_scene_file_runs() {
 fn compare_takes_a_scene_file() {
     let plot =
         std::env::temp_dir().join(format!("cloth3d-compare-file-{}.png", std::process::id()));
-    let out = cloth3d(&[
+    let stdout = cloth3d_ok(&[
         "compare",
         &example("capsule_drape.ron"),
         "--n",
@@ -331,12 +311,6 @@ fn compare_takes_a_scene_file() {
         "--plot",
         plot.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stdout = String::from_utf8(out.stdout).unwrap();
     let rows: Vec<serde_json::Value> = stdout
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())

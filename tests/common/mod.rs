@@ -71,3 +71,23 @@ pub fn scene_with(
     )
     .unwrap()
 }
+
+/// Runs the `cloth3d` command with `args`.
+pub fn cloth3d(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_cloth3d"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// Runs the `cloth3d` command with `args`, expects it to succeed and returns its stdout.
+pub fn cloth3d_ok(args: &[&str]) -> String {
+    let out = cloth3d(args);
+    assert!(
+        out.status.success(),
+        "cloth3d {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
