@@ -127,6 +127,13 @@ impl Cloth {
         self.workspace.factorizations()
     }
 
+    /// How many times the fast mass-spring solver has recomputed its
+    /// factor's numbers (same ordering and pattern) because the set of
+    /// particles held by friction on an obstacle changed.
+    pub fn refactorizations(&self) -> u64 {
+        self.workspace.fms.refactorizations
+    }
+
     fn restore_backup(&mut self) {
         let ws = &self.workspace;
         self.particles.x.copy_from_slice(&ws.backup_x);

@@ -10,7 +10,9 @@
 mod contact;
 mod obstacle;
 mod resolve;
+mod response;
 
 pub use contact::{contact, penetration_depth, Contact};
 pub use obstacle::{DynamicBody, Obstacle, ObstacleImpulse};
 pub(crate) use resolve::Collider;
+pub(crate) use response::{respond, Response};

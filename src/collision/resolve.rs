@@ -63,10 +63,13 @@ pub(crate) struct Collider {
     pub contact_obstacle: Vec<u32>,
     /// Per particle: the obstacle it touches is fixed or kinematic (not pushed back).
     pub contact_immovable: Vec<bool>,
-    /// Per particle: how far a solver's last projection pushed it out along
-    /// the normal during the current substep (m); counts towards the normal
-    /// impulse that bounds friction.
-    pushed: Vec<f32>,
+    /// Per particle, after [`Collider::detect_contacts`]: the gap (m) between
+    /// the particle and the thickness layer of the surface it touches or is
+    /// about to reach; zero or negative when it is already in the layer.
+    pub contact_gap: Vec<f32>,
+    /// Per particle, after [`Collider::detect_contacts`]: the friction
+    /// coefficient of the surface it touches.
+    pub contact_friction: Vec<f32>,
 }
 
 impl Collider {
@@ -104,13 +107,14 @@ impl Collider {
         self.touching.resize(particles, false);
         self.contact_obstacle.resize(particles, NONE);
         self.contact_immovable.resize(particles, false);
+        self.contact_gap.resize(particles, 0.0);
+        self.contact_friction.resize(particles, 0.0);
         // Contacts carried over from the last step must name an obstacle of this one.
         for i in 0..particles {
             if self.touching[i] && self.contact_obstacle[i] as usize >= obstacles.len() {
                 self.touching[i] = false;
             }
         }
-        self.pushed.resize(particles, 0.0);
         self.contact_normal.resize(particles, Vector::ZERO);
         self.surface_velocity.resize(particles, Vector::ZERO);
         if obstacles.is_empty() {
@@ -135,15 +139,6 @@ impl Collider {
                     .filter(|(_, b)| b.intersects(&region))
                     .map(|(o, _)| o as u32),
             ),
-        }
-    }
-
-    /// Records that a solver's contact constraint pushed particle `i` out
-    /// along the normal by `distance` metres' worth of velocity this substep
-    /// (speed × substep), so friction afterwards knows the normal impulse.
-    pub fn add_normal_push(&mut self, i: usize, distance: f32) {
-        if let Some(p) = self.pushed.get_mut(i) {
-            *p += distance;
         }
     }
 
@@ -236,44 +231,59 @@ impl Collider {
     }
 
     /// Finds which free particles touch an obstacle now (within the thickness
-    /// and a hair), with the contact normal, the surface velocity and the
-    /// obstacle, without moving anything. Solvers that treat contacts as
-    /// constraints call it at the start of a substep, so their result depends
-    /// only on the current state.
+    /// and a hair) or will reach its thickness layer within the substep of
+    /// `h` seconds (speculative contacts: moving at `v` plus `accel · h`
+    /// relative to the surface), with the contact normal, the gap
+    /// ([`Collider::contact_gap`]), the surface velocity and the obstacle,
+    /// without moving anything. Solvers that treat contacts as constraints
+    /// call it at the start of a substep, so their result depends only on the
+    /// current state.
+    #[allow(clippy::too_many_arguments)]
     pub fn detect_contacts(
         &mut self,
         x: &[Vector],
+        v: &[Vector],
         inv_mass: &[f32],
         obstacles: &[Obstacle],
         thickness: f32,
+        h: f32,
+        accel: Vector,
     ) {
         for i in 0..x.len() {
             self.touching[i] = false;
             if obstacles.is_empty() || inv_mass[i] == 0.0 {
                 continue;
             }
-            self.gather(x[i]);
-            let mut nearest = thickness + CONTACT_SLACK;
+            let predicted = v[i] + accel * h;
+            let reach = Vector::splat(thickness + CONTACT_SLACK + predicted.length() * h);
+            self.gather_box(Aabb::new(x[i] - reach, x[i] + reach));
+            // The earliest arrival wins: the smallest gap left after the motion.
+            let mut best = thickness + CONTACT_SLACK;
             for c in 0..self.candidates.len() {
                 let o = self.candidates[c] as usize;
                 let Some(contact) = contact(&*obstacles[o].shape, &self.poses[o], x[i]) else {
                     continue;
                 };
-                if contact.signed_distance < nearest {
-                    nearest = contact.signed_distance;
+                let surface_v = self.surface_velocity_of(obstacles, o, contact.point);
+                let approach = (predicted - surface_v).dot(contact.normal).min(0.0) * h;
+                let after = contact.signed_distance + approach;
+                if after < best {
+                    best = after;
                     self.touching[i] = true;
                     self.contact_obstacle[i] = o as u32;
                     self.contact_immovable[i] = obstacles[o].body.is_none();
                     self.contact_normal[i] = contact.normal;
-                    self.surface_velocity[i] = self.surface_velocity_of(obstacles, o, x[i]);
+                    self.contact_gap[i] = (contact.signed_distance - thickness).max(0.0);
+                    self.contact_friction[i] = obstacles[o].friction;
+                    self.surface_velocity[i] = surface_v;
                 }
             }
         }
     }
 
-    /// Pushes free particles out to the thickness, positions only, and
-    /// remembers how far this last push went (for friction). Used inside
-    /// iterative solvers so that they converge to a state outside the obstacles.
+    /// Pushes free particles out to the thickness, positions only. Used
+    /// inside iterative solvers so that they converge to a state outside the
+    /// obstacles; such solvers apply friction themselves.
     pub fn project_positions(
         &mut self,
         x: &mut [Vector],
@@ -288,7 +298,7 @@ impl Collider {
             if inv_mass[i] == 0.0 {
                 continue;
             }
-            self.pushed[i] = self.move_out(&mut x[i], None, obstacles, thickness);
+            self.move_out(&mut x[i], None, obstacles, thickness);
         }
     }
 
@@ -338,8 +348,6 @@ impl Collider {
                     contacts += 1;
                 }
             }
-            // A solver's push counts for this substep only.
-            self.pushed[i] = 0.0;
         }
         if edges {
             for kind in [SpringKind::Stretch, SpringKind::Shear] {
@@ -441,9 +449,8 @@ impl Collider {
         let v_old = p.v[i];
         let rel = v_old - surface_v;
         let vn = rel.dot(n);
-        // The normal velocity taken away (here, or by a solver's projection)
-        // bounds what friction may take away.
-        let removed = (-vn).max(0.0) + std::mem::take(&mut self.pushed[i]) / h;
+        // The normal velocity taken away bounds what friction may take away.
+        let removed = (-vn).max(0.0);
         let rel_t = rel - n * vn;
         let slip = rel_t.length();
         let limit = obstacle.friction * removed;

@@ -7,156 +7,58 @@
 //! projects every spring to its rest length (`d = L (x_j − x_i)/|x_j − x_i|`),
 //! and a global step, which solves `(M + h C + h² Lₖ) x = M y + h C xₙ + h² J d`
 //! for all particles at once. The matrix does not depend on the positions, so
-//! its sparse Cholesky factor (nalgebra-sparse) is computed once and reused
-//! until the pins, masses, step or stiffness change. Pinned particles are
-//! eliminated from the system. Spring damping enters through `C`, the
+//! its sparse Cholesky factor (nalgebra-sparse, in nested-dissection order:
+//! see [`super::global_matrix`]) is computed once and reused until the pins,
+//! masses, step or stiffness change. Pinned particles are eliminated from
+//! the system. Contacts and Coulomb friction are decided at the start of each
+//! substep and enter the solve (see [`step`]). Spring damping enters through `C`, the
 //! damping-weighted graph Laplacian: it damps the relative velocity of the two
 //! ends of a spring in every direction, not only along the spring.
 
-use nalgebra_sparse::factorization::CscCholesky;
-use nalgebra_sparse::{CooMatrix, CscMatrix};
-
 use crate::cloth::SpringKind;
-use crate::collision::{Collider, Obstacle};
+use crate::collision::{respond, Collider, Obstacle, Response};
 use crate::error::ClothError;
 use crate::forces::{add_wind_forces, ForceModel};
 use crate::math::Vector;
 
-/// What the factor was computed for; any change means a new factor.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct FactorKey {
-    h: u32,
-    params: [[u32; 2]; 3],
-    particles: usize,
-    springs: usize,
-}
+use super::global_matrix::{build_factor, key, weight, Factor};
 
-/// The factor of the global matrix, over the free particles.
-#[derive(Debug)]
-struct Factor {
-    key: FactorKey,
-    /// Free particle → row of the system (`u32::MAX` for pinned ones).
-    row: Vec<u32>,
-    /// Row of the system → particle.
-    particle: Vec<u32>,
-    /// The Cholesky factor `L` in compressed-column form (diagonal first in each column).
-    col_offsets: Vec<usize>,
-    row_indices: Vec<usize>,
-    values: Vec<f64>,
-}
+/// Weight of a particle held by static friction in the global matrix, as a
+/// multiple of its own diagonal entry (its mass plus its springs' weights):
+/// the surface holds it this many times harder than its springs and inertia
+/// move it.
+const CONTACT_WEIGHT: f64 = 8.0;
 
 /// Scratch memory and the cached factor of the fast mass-spring solver.
 #[derive(Debug, Default)]
 pub(crate) struct FastMassSpringState {
     factor: Option<Factor>,
-    /// How many times a factor was computed since this state was made.
+    /// How many times a factor was computed from scratch (ordering, symbolic
+    /// and numeric) since this state was made.
     pub factorizations: u64,
+    /// How many times the numeric factor was recomputed for a new set of contacts.
+    pub refactorizations: u64,
     y: Vec<Vector>,
     x_n: Vec<Vector>,
     f_ext: Vec<Vector>,
     rhs: Vec<[f64; 3]>,
     base: Vec<[f64; 3]>,
+    /// Per row: the contact weight wanted this substep.
+    contact: Vec<f64>,
+    /// Per row: where static friction holds the particle at the end of the
+    /// substep (when its contact weight is not zero).
+    held: Vec<Vector>,
+    /// Per row: the kinetic friction impulse of a sliding contact (N·s).
+    slide_impulse: Vec<Vector>,
+    /// Forces at the start of the substep (N).
+    force: Vec<Vector>,
+    values: Vec<f64>,
 }
 
 impl FastMassSpringState {
     /// Forgets the factor (pins, masses or topology changed).
     pub fn invalidate(&mut self) {
         self.factor = None;
-    }
-}
-
-fn key(model: &ForceModel, h: f32, n: usize) -> FactorKey {
-    FactorKey {
-        h: h.to_bits(),
-        params: model
-            .spring_params
-            .map(|p| [p.stiffness.to_bits(), p.damping.to_bits()]),
-        particles: n,
-        springs: model.springs.len(),
-    }
-}
-
-/// Weight of spring `s` in the matrix: `h c + h² k`.
-#[inline]
-fn weight(model: &ForceModel, kind: SpringKind, h: f32) -> f64 {
-    let p = model.spring_params[kind.index()];
-    h as f64 * p.damping as f64 + (h as f64) * (h as f64) * p.stiffness as f64
-}
-
-fn build_factor(model: &ForceModel, h: f32, n: usize) -> Result<Factor, ClothError> {
-    let mut row = vec![u32::MAX; n];
-    let mut particle = Vec::with_capacity(n);
-    for i in 0..n {
-        if model.inv_mass[i] != 0.0 {
-            row[i] = particle.len() as u32;
-            particle.push(i as u32);
-        }
-    }
-    let m = particle.len();
-    let mut coo = CooMatrix::<f64>::new(m, m);
-    for (r, &i) in particle.iter().enumerate() {
-        coo.push(r, r, model.mass[i as usize] as f64);
-    }
-    let springs = model.springs;
-    for kind in SpringKind::ALL {
-        let w = weight(model, kind, h);
-        for s in springs.range(kind) {
-            let (ri, rj) = (row[springs.a[s] as usize], row[springs.b[s] as usize]);
-            if ri != u32::MAX {
-                coo.push(ri as usize, ri as usize, w);
-            }
-            if rj != u32::MAX {
-                coo.push(rj as usize, rj as usize, w);
-            }
-            if ri != u32::MAX && rj != u32::MAX {
-                coo.push(ri as usize, rj as usize, -w);
-                coo.push(rj as usize, ri as usize, -w);
-            }
-        }
-    }
-    let csc = CscMatrix::from(&coo);
-    let chol = CscCholesky::factor(&csc)
-        .map_err(|e| ClothError::Solver(format!("Cholesky factorisation failed: {e:?}")))?;
-    let (col_offsets, row_indices, values) = chol.take_l().disassemble();
-    Ok(Factor {
-        key: key(model, h, n),
-        row,
-        particle,
-        col_offsets,
-        row_indices,
-        values,
-    })
-}
-
-impl Factor {
-    /// Solves `L Lᵀ x = b` in place for three right-hand sides at once.
-    fn solve(&self, b: &mut [[f64; 3]]) {
-        let (cols, rows, vals) = (&self.col_offsets, &self.row_indices, &self.values);
-        let m = b.len();
-        for j in 0..m {
-            let (start, end) = (cols[j], cols[j + 1]);
-            let d = vals[start];
-            let yj = [b[j][0] / d, b[j][1] / d, b[j][2] / d];
-            b[j] = yj;
-            for k in start + 1..end {
-                let (i, l) = (rows[k], vals[k]);
-                b[i][0] -= l * yj[0];
-                b[i][1] -= l * yj[1];
-                b[i][2] -= l * yj[2];
-            }
-        }
-        for j in (0..m).rev() {
-            let (start, end) = (cols[j], cols[j + 1]);
-            let mut acc = b[j];
-            for k in start + 1..end {
-                let (i, l) = (rows[k], vals[k]);
-                acc[0] -= l * b[i][0];
-                acc[1] -= l * b[i][1];
-                acc[2] -= l * b[i][2];
-            }
-            let d = vals[start];
-            b[j] = [acc[0] / d, acc[1] / d, acc[2] / d];
-        }
     }
 }
 
@@ -175,8 +77,16 @@ pub(crate) struct Contacts<'a> {
 }
 
 /// One substep of `h` seconds with `iterations` local/global iterations.
-/// After every global step the particles are projected out of the obstacles,
-/// so the iterations converge to a state that rests on them.
+///
+/// Contacts and friction enter the solve: every particle that touches a
+/// fixed or kinematic obstacle, or will reach it within the substep, is
+/// classified from the start state ([`respond`]). One held by static
+/// friction gets a stiff spring (weight [`CONTACT_WEIGHT`] times its
+/// diagonal) to where the surface carries it, so the cloth around it answers
+/// in the same solve; the weights change the matrix's diagonal only, so a
+/// new set of held particles costs a numeric refactorisation with the same
+/// pattern. A sliding one gets the kinetic friction impulse. After every
+/// global step the particles are projected out of the obstacles' surfaces.
 pub(crate) fn step(
     model: &ForceModel,
     x: &mut [Vector],
@@ -198,9 +108,15 @@ pub(crate) fn step(
         f_ext,
         rhs,
         base,
+        contact,
+        held,
+        slide_impulse,
+        force,
+        values,
+        refactorizations,
         ..
     } = st;
-    let Some(factor) = factor.as_ref() else {
+    let Some(factor) = factor.as_mut() else {
         return Ok(0);
     };
     let m = factor.particle.len();
@@ -209,6 +125,56 @@ pub(crate) fn step(
     }
     rhs.resize(m, [0.0; 3]);
     base.resize(m, [0.0; 3]);
+    contact.resize(m, 0.0);
+    held.resize(m, Vector::ZERO);
+    slide_impulse.resize(m, Vector::ZERO);
+    force.resize(n, Vector::ZERO);
+
+    // Contacts now or within the substep, and how each responds: a particle
+    // held by static friction gets a stiff spring to where the surface
+    // carries it; a sliding one gets the kinetic friction impulse and is
+    // kept out by the projections.
+    let collider = &mut *contacts.collider;
+    collider.detect_contacts(
+        x,
+        v,
+        model.inv_mass,
+        contacts.obstacles,
+        contacts.thickness,
+        h,
+        model.gravity,
+    );
+    model.forces(x, v, force);
+    for (r, &i) in factor.particle.iter().enumerate() {
+        let i = i as usize;
+        contact[r] = 0.0;
+        held[r] = Vector::ZERO;
+        slide_impulse[r] = Vector::ZERO;
+        // Only immovable obstacles are constraints of the solve: a dynamic
+        // body would be treated as infinitely heavy and thrown back.
+        if !(collider.touching[i] && collider.contact_immovable[i]) {
+            continue;
+        }
+        let nrm = collider.contact_normal[i];
+        let surface = collider.surface_velocity[i];
+        let rel = v[i] - surface;
+        let predicted = rel + force[i] * (h * model.inv_mass[i]);
+        let mu = collider.contact_friction[i];
+        match respond(rel, predicted, nrm, collider.contact_gap[i], mu, h) {
+            Response::Free => {}
+            Response::Stick { velocity } => {
+                held[r] = x[i] + (surface + velocity) * h;
+                contact[r] = CONTACT_WEIGHT * factor.base_values[factor.diagonal[r]];
+            }
+            Response::Slide { friction, .. } => {
+                slide_impulse[r] = friction * model.mass[i];
+            }
+        }
+    }
+    if factor.set_contacts(contact, values)? {
+        *refactorizations += 1;
+    }
+    let factor = &*factor;
 
     // External forces: gravity, drag and wind, taken explicitly.
     for i in 0..n {
@@ -230,6 +196,8 @@ pub(crate) fn step(
         let i = i as usize;
         base[r] = [0.0; 3];
         add(&mut base[r], y[i], model.mass[i] as f64);
+        // Kinetic friction: its impulse moves the particle h J / m.
+        add(&mut base[r], slide_impulse[r], h as f64);
     }
     let springs = model.springs;
     for kind in SpringKind::ALL {
@@ -280,17 +248,18 @@ pub(crate) fn step(
                 }
             }
         }
+        // Contacts held by friction: a stiff spring to the held point.
+        for (r, &w) in contact.iter().enumerate() {
+            if w > 0.0 {
+                add(&mut rhs[r], held[r], w);
+            }
+        }
         // Global step: one solve with the prefactored matrix.
         factor.solve(rhs);
         for (r, &i) in factor.particle.iter().enumerate() {
             x[i as usize] = Vector::new(rhs[r][0] as f32, rhs[r][1] as f32, rhs[r][2] as f32);
         }
-        contacts.collider.project_positions(
-            x,
-            model.inv_mass,
-            contacts.obstacles,
-            contacts.thickness,
-        );
+        collider.project_positions(x, model.inv_mass, contacts.obstacles, contacts.thickness);
     }
     let inv_h = 1.0 / h;
     for &i in &factor.particle {

@@ -7,16 +7,25 @@
 //! system is kept in block-sparse form: one symmetric 3×3 block per spring
 //! (`h D + h² K`) plus the lumped masses on the diagonal, never a dense matrix.
 //! Pins and contacts are constraints of the solve, enforced by the paper's
-//! filtering: a pinned particle's velocity change is zero in every direction,
-//! a particle pressed against an obstacle gets the surface's normal velocity
-//! and stays free to slide along it. Compressed springs drop the negative
-//! transverse term of their Jacobian, which keeps the matrix positive definite.
+//! filtering: a pinned particle's velocity change is zero in every direction;
+//! a particle pressed against an obstacle, or about to reach it within the
+//! step, gets the surface's normal velocity and, by Coulomb's law decided
+//! from the start state, either stays held (static friction: its whole
+//! velocity is set) or slides with the kinetic friction impulse. Friction
+//! inside the solve lets the cloth around a held particle answer in the same
+//! step. Compressed springs drop the negative transverse term of their
+//! Jacobian, which keeps the matrix positive definite.
+//!
+//! Further linearisations (`newton_iterations`) are Newton steps on the
+//! backward-Euler objective ([`objective`]), each followed by a line search
+//! that only accepts a step that lowers it, so re-linearising can never make
+//! the step worse.
 
 use glam::Mat3;
 
 use crate::cloth::SpringKind;
-use crate::collision::Collider;
-use crate::forces::ForceModel;
+use crate::collision::{respond, Collider, Response};
+use crate::forces::{add_wind_forces, ForceModel};
 use crate::math::Vector;
 
 /// What constrains a particle during the solve.
@@ -28,6 +37,9 @@ enum Filter {
     Fixed,
     /// Against a surface with this unit normal: free only in its tangent plane.
     Plane(Vector),
+    /// Held by static friction on a surface with this unit normal: moves
+    /// with the surface.
+    Stick(Vector),
 }
 
 impl Filter {
@@ -35,7 +47,7 @@ impl Filter {
     fn apply(self, v: Vector) -> Vector {
         match self {
             Filter::Free => v,
-            Filter::Fixed => Vector::ZERO,
+            Filter::Fixed | Filter::Stick(_) => Vector::ZERO,
             Filter::Plane(n) => v - n * n.dot(v),
         }
     }
@@ -49,8 +61,12 @@ pub(crate) struct ImplicitState {
     diag: Vec<Mat3>,
     precond: Vec<Mat3>,
     filter: Vec<Filter>,
-    /// All `Free`: for products that must not be filtered.
-    unfiltered: Vec<Filter>,
+    /// Per particle: the velocity change its constraint prescribes.
+    z: Vec<Vector>,
+    /// Per particle: gravity and wind at the start of the step (N).
+    external: Vec<Vector>,
+    /// Per particle: the kinetic friction impulse of a sliding contact (N·s).
+    friction: Vec<Vector>,
     f: Vec<Vector>,
     b: Vec<Vector>,
     dv: Vec<Vector>,
@@ -61,6 +77,7 @@ pub(crate) struct ImplicitState {
     xe: Vec<Vector>,
     ve: Vec<Vector>,
     acc: Vec<Vector>,
+    trial: Vec<Vector>,
 }
 
 impl ImplicitState {
@@ -71,8 +88,10 @@ impl ImplicitState {
             buf.resize(n, Mat3::ZERO);
         }
         self.filter.resize(n, Filter::Free);
-        self.unfiltered.resize(n, Filter::Free);
         for buf in [
+            &mut self.z,
+            &mut self.external,
+            &mut self.friction,
             &mut self.f,
             &mut self.b,
             &mut self.dv,
@@ -169,8 +188,58 @@ fn assemble(
     }
 }
 
-/// One backward-Euler substep of `h` seconds, with `newton` linearisations
-/// (1 is the paper's single linear solve). Returns the CG iterations used.
+/// The backward-Euler objective at the velocity change `acc` (new velocity
+/// `v + acc`, new positions `x + h (v + acc)`), whose minimum is the step:
+/// `½ accᵀ M acc + U(x_new) + h/2 Σ c (d̂·Δv_new)² + h/2 γ Σ m |v_new|²
+/// − h Σ f_ext·v_new − Σ J·v_new`, with the damping directions `d̂` of the
+/// start of the step, the external forces `f_ext` (gravity, wind) taken there
+/// and `J` the kinetic friction impulses. Its gradient is `M acc − h f − J`,
+/// so Newton's method on it is the linearised step, and a line search on it
+/// keeps stiff springs from overshooting. Free particles only.
+fn objective(
+    model: &ForceModel,
+    x: &[Vector],
+    v: &[Vector],
+    acc: &[Vector],
+    st: &ImplicitState,
+    h: f32,
+) -> f64 {
+    let h = h as f64;
+    let mut phi = 0.0f64;
+    for i in 0..x.len() {
+        if model.inv_mass[i] == 0.0 {
+            continue;
+        }
+        let m = model.mass[i] as f64;
+        let a = acc[i].as_dvec3();
+        let vn = (v[i] + acc[i]).as_dvec3();
+        phi += 0.5 * m * a.length_squared()
+            + 0.5 * h * model.air_drag as f64 * m * vn.length_squared()
+            - (st.external[i].as_dvec3() * h + st.friction[i].as_dvec3()).dot(vn);
+    }
+    let springs = model.springs;
+    for kind in SpringKind::ALL {
+        let p = model.spring_params[kind.index()];
+        let (k, c) = (p.stiffness as f64, p.damping as f64);
+        for s in springs.range(kind) {
+            let (i, j) = (springs.a[s] as usize, springs.b[s] as usize);
+            let (vi, vj) = ((v[i] + acc[i]).as_dvec3(), (v[j] + acc[j]).as_dvec3());
+            let d = (x[j].as_dvec3() + vj * h) - (x[i].as_dvec3() + vi * h);
+            let stretch = d.length() - springs.rest[s] as f64;
+            phi += 0.5 * k * stretch * stretch;
+            if c > 0.0 {
+                let dir = (x[j] - x[i]).as_dvec3().normalize_or_zero();
+                let rate = dir.dot(vj - vi);
+                phi += 0.5 * h * c * rate * rate;
+            }
+        }
+    }
+    phi
+}
+
+/// One backward-Euler substep of `h` seconds by Newton's method with a line
+/// search: up to `newton` linearisations, the first being Baraff and
+/// Witkin's single linear solve. Returns the CG iterations used.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn step(
     model: &ForceModel,
@@ -188,13 +257,22 @@ pub(crate) fn step(
     let mut xe = std::mem::take(&mut st.xe);
     let mut ve = std::mem::take(&mut st.ve);
     let mut acc = std::mem::take(&mut st.acc);
-    xe.resize(n, Vector::ZERO);
-    ve.resize(n, Vector::ZERO);
-    acc.clear();
-    acc.resize(n, Vector::ZERO);
+    let mut trial = std::mem::take(&mut st.trial);
+    for buf in [&mut xe, &mut ve, &mut acc, &mut trial] {
+        buf.clear();
+        buf.resize(n, Vector::ZERO);
+    }
+    // External forces, held at the start of the step.
+    for i in 0..n {
+        st.external[i] = model.gravity * model.mass[i];
+        st.friction[i] = Vector::ZERO;
+    }
+    add_wind_forces(model.triangles, &model.wind, x, &mut st.external);
     let mut iterations = 0;
+    let mut phi = f64::INFINITY;
     for round in 0..newton.max(1) {
         if round == 0 {
+            // Baraff and Witkin's step: linearised at the start of the step.
             xe.copy_from_slice(x);
             ve.copy_from_slice(v);
         } else {
@@ -204,26 +282,60 @@ pub(crate) fn step(
             }
         }
         assemble(model, &xe, &ve, &acc, round == 0, h, st);
-        iterations += solve(model, v, &acc, st, contacts, max_iterations, tolerance);
-        // What the contact constraints did is momentum handed to the obstacles:
-        // the unfiltered residual A Δv − b of a constrained particle.
-        multiply(
-            model,
-            &st.blocks,
-            &st.mass,
-            &st.unfiltered,
-            &st.dv,
-            &mut st.q,
-        );
+        if round == 0 {
+            // The constraints, from the start state (`st.f` holds its forces).
+            constrain(model, v, st, contacts, h);
+        }
         for i in 0..n {
-            if let Filter::Plane(nrm) = st.filter[i] {
-                let push = nrm.dot(st.q[i] - st.b[i]);
-                let reaction = nrm * push;
-                contacts.add_impulse(contacts.contact_obstacle[i] as usize, x[i], -reaction);
-                // The surface's push bounds the friction applied after the solve.
-                contacts.add_normal_push(i, push.max(0.0) / model.mass[i] * h);
+            st.b[i] += st.friction[i];
+            st.dv[i] = if round == 0 { st.z[i] } else { Vector::ZERO };
+        }
+        iterations += solve(model, st, max_iterations, tolerance);
+        if round == 0 {
+            // The constraints' own part of the change is taken whole.
+            acc.copy_from_slice(&st.z);
+            for i in 0..n {
+                st.dv[i] -= st.z[i];
             }
-            acc[i] += st.dv[i];
+            phi = objective(model, x, v, &acc, st, h);
+        }
+        // Line search: the longest of 1, ½, ¼, ... that lowers the objective.
+        let mut alpha = 1.0f32;
+        let mut accepted = false;
+        for _ in 0..8 {
+            for i in 0..n {
+                trial[i] = acc[i] + st.dv[i] * alpha;
+            }
+            let now = objective(model, x, v, &trial, st, h);
+            if now.is_finite() && now <= phi {
+                phi = now;
+                accepted = true;
+                break;
+            }
+            alpha *= 0.5;
+        }
+        if !accepted {
+            break;
+        }
+        std::mem::swap(&mut acc, &mut trial);
+    }
+    // What the contact constraints did is momentum handed to the obstacles:
+    // the force that holds a constrained particle, M acc − h f − J at the end.
+    for i in 0..n {
+        ve[i] = v[i] + acc[i];
+        xe[i] = x[i] + ve[i] * h;
+    }
+    model.forces(&xe, &ve, &mut st.f);
+    for i in 0..n {
+        if let Filter::Plane(nrm) | Filter::Stick(nrm) = st.filter[i] {
+            let force = acc[i] * model.mass[i] - st.f[i] * h - st.friction[i];
+            // Sliding, the surface pushes along its normal only; stuck,
+            // friction holds the rest too.
+            let reaction = match st.filter[i] {
+                Filter::Stick(_) => force,
+                _ => nrm * nrm.dot(force),
+            };
+            contacts.add_impulse(contacts.contact_obstacle[i] as usize, x[i], -reaction);
         }
     }
     for i in 0..n {
@@ -236,22 +348,23 @@ pub(crate) fn step(
     st.xe = xe;
     st.ve = ve;
     st.acc = acc;
+    st.trial = trial;
     iterations
 }
 
-/// Sets up the constraints and solves the assembled system for `st.dv` by
-/// modified preconditioned conjugate gradient. Returns the iterations used.
-fn solve(
+/// Sets the constraints of the step from the start state: pins fix the
+/// velocity; a contact fixes its normal part (sliding, with the kinetic
+/// friction impulse added to `b` and kept in `friction`) or all of it
+/// (stuck). `z` is the velocity change each constraint prescribes, and the
+/// starting guess of the first solve.
+fn constrain(
     model: &ForceModel,
     v: &[Vector],
-    acc: &[Vector],
     st: &mut ImplicitState,
     contacts: &Collider,
-    max_iterations: u32,
-    tolerance: f32,
-) -> u32 {
+    h: f32,
+) {
     let n = v.len();
-    // Constraints: pins fix the velocity, contacts fix its normal part.
     for i in 0..n {
         let (filter, z) = if model.inv_mass[i] == 0.0 {
             (Filter::Fixed, Vector::ZERO)
@@ -261,25 +374,40 @@ fn solve(
             // Only immovable obstacles are constraints of the solve: a dynamic
             // body would be treated as infinitely heavy and thrown back.
             let nrm = contacts.contact_normal[i];
-            let rel = v[i] + acc[i] - contacts.surface_velocity[i];
-            // Held against the surface only while pushed into it.
-            if rel.dot(nrm) <= 0.0 || st.f[i].dot(nrm) < 0.0 {
-                (Filter::Plane(nrm), -nrm * rel.dot(nrm))
-            } else {
-                (Filter::Free, Vector::ZERO)
+            let rel = v[i] - contacts.surface_velocity[i];
+            let predicted = rel + st.f[i] * (h / model.mass[i]);
+            let mu = contacts.contact_friction[i];
+            match respond(rel, predicted, nrm, contacts.contact_gap[i], mu, h) {
+                Response::Free => (Filter::Free, Vector::ZERO),
+                Response::Stick { velocity } => (Filter::Stick(nrm), velocity - rel),
+                Response::Slide {
+                    normal_velocity,
+                    friction,
+                } => {
+                    st.friction[i] = friction * model.mass[i];
+                    (Filter::Plane(nrm), nrm * (normal_velocity - rel.dot(nrm)))
+                }
             }
         } else {
             (Filter::Free, Vector::ZERO)
         };
         st.filter[i] = filter;
-        st.dv[i] = z;
-        st.precond[i] = if filter == Filter::Fixed {
+        st.z[i] = z;
+    }
+}
+
+/// Solves the assembled system for `st.dv` by modified preconditioned
+/// conjugate gradient, from the guess in `st.dv`, with the filters in
+/// `st.filter`. Returns the iterations used.
+fn solve(model: &ForceModel, st: &mut ImplicitState, max_iterations: u32, tolerance: f32) -> u32 {
+    let n = st.dv.len();
+    for i in 0..n {
+        st.precond[i] = if matches!(st.filter[i], Filter::Fixed | Filter::Stick(_)) {
             Mat3::IDENTITY
         } else {
             st.diag[i].inverse()
         };
     }
-
     // Modified preconditioned conjugate gradient (Baraff & Witkin, section 5.3).
     let ImplicitState {
         blocks,

@@ -2,7 +2,9 @@
 
 mod explicit_euler;
 mod fast_mass_spring;
+mod global_matrix;
 mod implicit_euler;
+mod ordering;
 mod rk4;
 mod symplectic_euler;
 mod verlet;
@@ -197,9 +199,15 @@ pub(crate) fn substep(
         Integrator::Verlet => verlet::step(&model, x, v, workspace, h),
         Integrator::Rk4 => rk4::step(&model, x, v, workspace, h),
         Integrator::ImplicitEuler => {
-            workspace
-                .collider
-                .detect_contacts(x, &particles.inv_mass, obstacles, params.thickness);
+            workspace.collider.detect_contacts(
+                x,
+                v,
+                &particles.inv_mass,
+                obstacles,
+                params.thickness,
+                h,
+                params.gravity,
+            );
             return Ok(implicit_euler::step(
                 &model,
                 x,

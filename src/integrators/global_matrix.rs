@@ -1,0 +1,205 @@
+//! The global matrix of a mass-spring cloth, `M + h C + h² K` with every
+//! spring taken isotropically (weight `h c + h² k` on the graph Laplacian),
+//! factored once by sparse Cholesky (nalgebra-sparse) in nested-dissection
+//! order; the fast mass-spring solver's global step solves with it. Extra
+//! weights on the diagonal (particles held by contacts) cost a numeric
+//! refactorisation with the same pattern.
+
+use nalgebra_sparse::factorization::CscCholesky;
+use nalgebra_sparse::{CooMatrix, CscMatrix};
+
+use crate::cloth::SpringKind;
+use crate::error::ClothError;
+use crate::forces::ForceModel;
+
+use super::ordering::nested_dissection;
+
+/// What the factor was computed for; any change means a new factor.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct FactorKey {
+    h: u32,
+    params: [[u32; 2]; 3],
+    particles: usize,
+    springs: usize,
+}
+
+/// The factor of the global matrix, over the free particles.
+#[derive(Debug)]
+pub(crate) struct Factor {
+    pub key: FactorKey,
+    /// Free particle → row of the system (`u32::MAX` for pinned ones).
+    pub row: Vec<u32>,
+    /// Row of the system → particle, in nested-dissection order.
+    pub particle: Vec<u32>,
+    /// The sparse Cholesky factor `L` (diagonal first in each column).
+    chol: CscCholesky<f64>,
+    /// The matrix's values without contacts, in the factor's input order.
+    pub base_values: Vec<f64>,
+    /// Per row: where its diagonal entry is in `base_values`.
+    pub diagonal: Vec<usize>,
+    /// Per row: the contact weight on the diagonal of the current factor.
+    contact: Vec<f64>,
+}
+
+/// What a factor for this model and step depends on.
+pub(crate) fn key(model: &ForceModel, h: f32, n: usize) -> FactorKey {
+    FactorKey {
+        h: h.to_bits(),
+        params: model
+            .spring_params
+            .map(|p| [p.stiffness.to_bits(), p.damping.to_bits()]),
+        particles: n,
+        springs: model.springs.len(),
+    }
+}
+
+/// Weight of spring `s` in the matrix: `h c + h² k`.
+#[inline]
+pub(crate) fn weight(model: &ForceModel, kind: SpringKind, h: f32) -> f64 {
+    let p = model.spring_params[kind.index()];
+    h as f64 * p.damping as f64 + (h as f64) * (h as f64) * p.stiffness as f64
+}
+
+/// The free particles in nested-dissection order of the spring graph.
+fn free_order(model: &ForceModel, n: usize) -> Vec<u32> {
+    let free: Vec<u32> = (0..n as u32)
+        .filter(|&i| model.inv_mass[i as usize] != 0.0)
+        .collect();
+    let mut index = vec![u32::MAX; n];
+    for (k, &i) in free.iter().enumerate() {
+        index[i as usize] = k as u32;
+    }
+    let springs = model.springs;
+    let mut degree = vec![0usize; free.len() + 1];
+    let pairs = || {
+        (0..springs.len()).filter_map(|s| {
+            let (a, b) = (index[springs.a[s] as usize], index[springs.b[s] as usize]);
+            (a != u32::MAX && b != u32::MAX).then_some((a, b))
+        })
+    };
+    for (a, b) in pairs() {
+        degree[a as usize + 1] += 1;
+        degree[b as usize + 1] += 1;
+    }
+    for k in 1..degree.len() {
+        degree[k] += degree[k - 1];
+    }
+    let offsets = degree.clone();
+    let mut fill = degree;
+    let mut neighbours = vec![0u32; offsets[free.len()]];
+    for (a, b) in pairs() {
+        neighbours[fill[a as usize]] = b;
+        fill[a as usize] += 1;
+        neighbours[fill[b as usize]] = a;
+        fill[b as usize] += 1;
+    }
+    nested_dissection(&offsets, &neighbours)
+        .into_iter()
+        .map(|k| free[k as usize])
+        .collect()
+}
+
+/// Orders, assembles and factors the global matrix for substeps of `h` seconds.
+pub(crate) fn build_factor(model: &ForceModel, h: f32, n: usize) -> Result<Factor, ClothError> {
+    let particle = free_order(model, n);
+    let mut row = vec![u32::MAX; n];
+    for (r, &i) in particle.iter().enumerate() {
+        row[i as usize] = r as u32;
+    }
+    let m = particle.len();
+    let mut coo = CooMatrix::<f64>::new(m, m);
+    for (r, &i) in particle.iter().enumerate() {
+        coo.push(r, r, model.mass[i as usize] as f64);
+    }
+    let springs = model.springs;
+    for kind in SpringKind::ALL {
+        let w = weight(model, kind, h);
+        for s in springs.range(kind) {
+            let (ri, rj) = (row[springs.a[s] as usize], row[springs.b[s] as usize]);
+            if ri != u32::MAX {
+                coo.push(ri as usize, ri as usize, w);
+            }
+            if rj != u32::MAX {
+                coo.push(rj as usize, rj as usize, w);
+            }
+            if ri != u32::MAX && rj != u32::MAX {
+                coo.push(ri as usize, rj as usize, -w);
+                coo.push(rj as usize, ri as usize, -w);
+            }
+        }
+    }
+    let csc = CscMatrix::from(&coo);
+    let mut diagonal = vec![0usize; m];
+    for (j, d) in diagonal.iter_mut().enumerate() {
+        let start = csc.col_offsets()[j];
+        let rows = &csc.row_indices()[start..csc.col_offsets()[j + 1]];
+        *d = start + rows.iter().position(|&r| r == j).unwrap_or(0);
+    }
+    let chol = CscCholesky::factor(&csc)
+        .map_err(|e| ClothError::Solver(format!("Cholesky factorisation failed: {e:?}")))?;
+    Ok(Factor {
+        key: key(model, h, n),
+        row,
+        particle,
+        chol,
+        base_values: csc.values().to_vec(),
+        diagonal,
+        contact: vec![0.0; m],
+    })
+}
+
+impl Factor {
+    /// Solves `L Lᵀ x = b` in place for three right-hand sides at once.
+    pub fn solve(&self, b: &mut [[f64; 3]]) {
+        let l = self.chol.l();
+        let (cols, rows, vals) = (l.col_offsets(), l.row_indices(), l.values());
+        let m = b.len();
+        for j in 0..m {
+            let (start, end) = (cols[j], cols[j + 1]);
+            let d = vals[start];
+            let yj = [b[j][0] / d, b[j][1] / d, b[j][2] / d];
+            b[j] = yj;
+            for k in start + 1..end {
+                let (i, l) = (rows[k], vals[k]);
+                b[i][0] -= l * yj[0];
+                b[i][1] -= l * yj[1];
+                b[i][2] -= l * yj[2];
+            }
+        }
+        for j in (0..m).rev() {
+            let (start, end) = (cols[j], cols[j + 1]);
+            let mut acc = b[j];
+            for k in start + 1..end {
+                let (i, l) = (rows[k], vals[k]);
+                acc[0] -= l * b[i][0];
+                acc[1] -= l * b[i][1];
+                acc[2] -= l * b[i][2];
+            }
+            let d = vals[start];
+            b[j] = [acc[0] / d, acc[1] / d, acc[2] / d];
+        }
+    }
+
+    /// Puts the contact weights `contact` on the diagonal and recomputes the
+    /// numeric factor (same pattern) if they differ from the current ones.
+    /// Returns whether it did.
+    pub fn set_contacts(
+        &mut self,
+        contact: &[f64],
+        values: &mut Vec<f64>,
+    ) -> Result<bool, ClothError> {
+        if self.contact == contact {
+            return Ok(false);
+        }
+        values.clear();
+        values.extend_from_slice(&self.base_values);
+        for (r, &w) in contact.iter().enumerate() {
+            values[self.diagonal[r]] += w;
+        }
+        self.chol
+            .refactor(values)
+            .map_err(|e| ClothError::Solver(format!("Cholesky factorisation failed: {e:?}")))?;
+        self.contact.copy_from_slice(contact);
+        Ok(true)
+    }
+}
