@@ -213,3 +213,33 @@ fn export_obj_writes_one_mesh_per_frame_that_parses_back() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn both_large_step_integrators_drape_at_one_step_a_frame_within_five_percent() {
+    for integrator in ["implicit-euler", "fast-mass-spring"] {
+        let stdout = cloth3d_ok(&[
+            "run",
+            "drape",
+            "--integrator",
+            integrator,
+            "--dt",
+            "0.016667",
+            "--substeps",
+            "1",
+            "--json",
+        ]);
+        let v: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+        assert_eq!(v["finite"], true, "{stdout}");
+        assert_eq!(v["substeps"], 1, "{stdout}");
+        assert!(v["max_stretch"].as_f64().unwrap() < 0.05, "{stdout}");
+        assert!(v["max_penetration"].as_f64().unwrap() <= 0.002, "{stdout}");
+        assert!(
+            v["max_penetration_any_frame"].as_f64().unwrap() <= 0.002,
+            "{stdout}"
+        );
+        assert!(
+            v["min_y"].as_f64().unwrap() > -0.4,
+            "slid off the ball: {stdout}"
+        );
+    }
+}

@@ -2,7 +2,9 @@
 
 mod common;
 
+use cloth3d::metrics::run;
 use cloth3d::prelude::*;
+use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
 use common::oscillator;
 
 #[test]
@@ -155,5 +157,46 @@ fn stiff_heavy_strongly_damped_cloth_is_stable_at_a_frame_step() {
             "{integrator}: centroid {:?}",
             cloth.centroid()
         );
+    }
+}
+
+/// The `drape` scene (64 × 64, a 1/60 s frame, one step a frame) with the
+/// stretch springs made `k` N/m with damping `c` N·s/m.
+fn stiff_drape(integrator: Integrator, k: f32, c: f32) -> cloth3d::metrics::RunMetrics {
+    let mut material = Material::cotton();
+    material.stretch = SpringParams::new(k, c);
+    let mut scene = Scene::build(
+        SceneKind::Drape,
+        &SceneOptions {
+            integrator: Some(integrator),
+            substeps: Some(Substeps::Fixed(1)),
+            material: Some(material),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let m = run(&mut scene, 120).unwrap();
+    // Contacts changing only refactor the numbers: one ordering for the run.
+    if integrator == Integrator::FastMassSpring {
+        assert_eq!(scene.cloth.factorizations(), 1);
+        assert!(scene.cloth.refactorizations() > 0);
+    }
+    m
+}
+
+#[test]
+fn fast_mass_spring_drapes_stiff_cloth_at_one_step_a_frame() {
+    for k in [1.0e5f32, 1.0e6] {
+        // From no damping to far above critical (about 22 N·s/m at 1e6 N/m).
+        for c in [0.0f32, 10.0, 100.0] {
+            let m = stiff_drape(Integrator::FastMassSpring, k, c);
+            let what = format!("k = {k}, c = {c}: {m:?}");
+            assert!(m.finite, "{what}");
+            assert!(m.max_stretch < 0.05, "{what}");
+            assert!(m.max_penetration_any_frame <= 0.002, "{what}");
+            // It rests on the ball: the skirt hangs below the equator, the
+            // top stays on the ball (a cloth sliding off falls past y = -0.4).
+            assert!(m.min_y > -0.4 && m.min_y < 0.3, "{what}");
+        }
     }
 }
