@@ -52,6 +52,9 @@ pub(crate) struct FastMassSpringState {
     slide_impulse: Vec<Vector>,
     /// Forces at the start of the substep (N).
     force: Vec<Vector>,
+    /// Per particle: the contact spring's pull at the end of the last substep
+    /// (zero unless it was held), in the global step's units.
+    held_force: Vec<Vector>,
     values: Vec<f64>,
 }
 
@@ -112,6 +115,7 @@ pub(crate) fn step(
         held,
         slide_impulse,
         force,
+        held_force,
         values,
         refactorizations,
         ..
@@ -129,6 +133,7 @@ pub(crate) fn step(
     held.resize(m, Vector::ZERO);
     slide_impulse.resize(m, Vector::ZERO);
     force.resize(n, Vector::ZERO);
+    held_force.resize(n, Vector::ZERO);
 
     // Contacts now or within the substep, and how each responds: a particle
     // held by static friction gets a stiff spring to where the surface
@@ -160,7 +165,25 @@ pub(crate) fn step(
         let rel = v[i] - surface;
         let predicted = rel + force[i] * (h * model.inv_mass[i]);
         let mu = collider.contact_friction[i];
-        match respond(rel, predicted, nrm, collider.contact_gap[i], mu, h) {
+        let mut response = respond(rel, predicted, nrm, collider.contact_gap[i], mu, h);
+        // Static friction holds on while the force that held the particle in
+        // the last substep stays inside the friction cone: the start-state
+        // estimate alone sees every spring's pull, not what the cloth around
+        // answers, and would let a resting particle flicker between held and
+        // sliding.
+        if let Response::Slide {
+            normal_velocity, ..
+        } = response
+        {
+            let f = held_force[i];
+            let push = f.dot(nrm);
+            if push > 0.0 && (f - nrm * push).length() <= mu * push {
+                response = Response::Stick {
+                    velocity: nrm * normal_velocity,
+                };
+            }
+        }
+        match response {
             Response::Free => {}
             Response::Stick { velocity } => {
                 held[r] = x[i] + (surface + velocity) * h;
@@ -226,7 +249,7 @@ pub(crate) fn step(
     for &i in &factor.particle {
         x[i as usize] = y[i as usize];
     }
-    for _ in 0..iterations {
+    for it in 0..iterations {
         rhs.copy_from_slice(base);
         // Local step: every spring to its rest length, h² k J d into the right-hand side.
         for kind in SpringKind::ALL {
@@ -258,6 +281,17 @@ pub(crate) fn step(
         factor.solve(rhs);
         for (r, &i) in factor.particle.iter().enumerate() {
             x[i as usize] = Vector::new(rhs[r][0] as f32, rhs[r][1] as f32, rhs[r][2] as f32);
+        }
+        if it + 1 == iterations {
+            // What held each particle, for static friction in the next substep.
+            for (r, &i) in factor.particle.iter().enumerate() {
+                let i = i as usize;
+                held_force[i] = if contact[r] > 0.0 {
+                    (held[r] - x[i]) * contact[r] as f32
+                } else {
+                    Vector::ZERO
+                };
+            }
         }
         collider.project_positions(x, model.inv_mass, contacts.obstacles, contacts.thickness);
     }
