@@ -177,3 +177,37 @@ pub fn bench_rapier_drape(n: usize, warmup: u32, frames: u32) -> BenchRow {
         speedup_vs_rapier: None,
     }
 }
+
+/// Wall time per frame against particle count, one curve per engine and
+/// integrator, both axes in powers of ten: the picture in BENCHMARKS.md.
+pub fn plot(rows: &[BenchRow], width: u32, height: u32) -> Result<image::RgbImage, String> {
+    let mut curves: Vec<crate::plot::Curve> = Vec::new();
+    for row in rows {
+        let label = if row.engine == "cloth3d" {
+            format!("cloth3d {}", row.integrator)
+        } else {
+            row.engine.clone()
+        };
+        let point = (
+            ((row.n * row.n) as f64).log10(),
+            (1000.0 * row.frame_wall_s).log10(),
+        );
+        match curves.iter_mut().find(|c| c.label == label) {
+            Some(c) => c.points.push(point),
+            None => {
+                let color = crate::plot::COLORS[curves.len() % crate::plot::COLORS.len()];
+                curves.push(crate::plot::Curve {
+                    label,
+                    points: vec![point],
+                    color,
+                });
+            }
+        }
+    }
+    let panel = crate::plot::Panel {
+        title: "drape: wall time per frame (1/60 s), one thread".into(),
+        y_label: "log10 ms per frame".into(),
+        curves,
+    };
+    crate::plot::draw(&[panel], "log10 particles", width, height)
+}

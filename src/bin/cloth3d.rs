@@ -136,6 +136,9 @@ struct BenchArgs {
     /// One JSON object per line instead of a table.
     #[arg(long)]
     json: bool,
+    /// Draw wall time per frame against particle count to this PNG.
+    #[arg(long, value_name = "FILE.png")]
+    plot: Option<std::path::PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -541,8 +544,9 @@ fn compare_command(args: CompareArgs) -> ExitCode {
     ExitCode::SUCCESS
 }
 
-/// The fast mass-spring solver's sparse Cholesky factor grows too large above this N.
-const FMS_MAX_N: usize = 128;
+/// Above this N the fast mass-spring solver's Cholesky factor (and a
+/// frame of it, seconds at N = 256) grows too large for the bench.
+const FMS_MAX_N: usize = 256;
 
 fn bench_command(args: BenchArgs) -> ExitCode {
     #[cfg(not(feature = "parallel"))]
@@ -588,7 +592,9 @@ fn bench_rows(args: &BenchArgs) -> ExitCode {
             "vs rapier"
         ));
     }
+    let rows = std::cell::RefCell::new(Vec::new());
     let print = |row: &BenchRow| {
+        rows.borrow_mut().push(row.clone());
         if args.json {
             emit(&format!(
                 "{}\n",
@@ -638,6 +644,14 @@ fn bench_rows(args: &BenchArgs) -> ExitCode {
                     Err(e) => eprintln!("{} N={n} {}: {e}", kind.name(), integrator.name()),
                 }
             }
+        }
+    }
+    if let Some(path) = &args.plot {
+        let written = cloth3d::bench::plot(&rows.borrow(), 900, 560)
+            .and_then(|img| img.save(path).map_err(|e| e.to_string()));
+        if let Err(e) = written {
+            eprintln!("error: {}: {e}", path.display());
+            return ExitCode::from(2);
         }
     }
     ExitCode::SUCCESS
