@@ -243,3 +243,67 @@ fn both_large_step_integrators_drape_at_one_step_a_frame_within_five_percent() {
         );
     }
 }
+
+#[test]
+fn bench_json_has_every_figure_and_plots_them() {
+    let dir = std::env::temp_dir().join(format!("cloth3d-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let png = dir.join("bench.png");
+    let stdout = cloth3d_ok(&[
+        "bench",
+        "--n",
+        "8",
+        "--n",
+        "12",
+        "--integrator",
+        "symplectic-euler",
+        "--integrator",
+        "fast-mass-spring",
+        "--warmup",
+        "2",
+        "--frames",
+        "3",
+        "--json",
+        "--plot",
+        png.to_str().unwrap(),
+    ]);
+    let rows: Vec<serde_json::Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    // Rapier's cloth and two integrators at each of two sizes.
+    assert_eq!(rows.len(), 6, "{stdout}");
+    for row in &rows {
+        for key in [
+            "scene",
+            "n",
+            "engine",
+            "integrator",
+            "threads",
+            "substeps",
+            "frame_wall_s",
+            "particle_substeps_per_s",
+            "max_stretch",
+            "max_penetration",
+        ] {
+            assert!(row.get(key).is_some(), "missing {key} in {row}");
+        }
+        assert!(row["frame_wall_s"].as_f64().unwrap() > 0.0, "{row}");
+        if row["engine"] == "cloth3d" {
+            assert!(row["speedup_vs_rapier"].as_f64().unwrap() > 0.0, "{row}");
+            if row["integrator"] == "symplectic-euler" {
+                assert!(row["spring_evals_per_s"].as_f64().unwrap() > 0.0, "{row}");
+            }
+        }
+    }
+    let img = image::open(&png).unwrap().to_rgb8();
+    let coloured = img
+        .pixels()
+        .filter(|p| {
+            let [r, g, b] = p.0;
+            r.max(g).max(b) - r.min(g).min(b) > 60
+        })
+        .count();
+    assert!(coloured > 200, "the plot has {coloured} coloured pixels");
+    let _ = std::fs::remove_dir_all(&dir);
+}
