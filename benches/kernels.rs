@@ -16,7 +16,7 @@ use std::hint::black_box;
 use cloth3d::collision::contact;
 use cloth3d::prelude::*;
 use criterion::{criterion_group, criterion_main, Criterion};
-use parry3d::shape::{Ball, Cuboid};
+use parry3d::shape::{Ball, Cuboid, Shape};
 
 /// A 64 × 64 cotton cloth dropped on a ball, 30 frames in (resting on it).
 fn draped(integrator: Integrator) -> (Cloth, Vec<Obstacle>) {
@@ -72,22 +72,17 @@ fn contact_queries(c: &mut Criterion) {
     let ball = Ball::new(0.3);
     let cuboid = Cuboid::new(Vector::splat(0.25));
     let mut group = c.benchmark_group("contact_queries");
-    group.bench_function("ball", |b| {
-        b.iter(|| {
-            points
-                .iter()
-                .filter_map(|&p| contact(&ball, &pose, black_box(p)))
-                .count()
-        })
-    });
-    group.bench_function("cuboid", |b| {
-        b.iter(|| {
-            points
-                .iter()
-                .filter_map(|&p| contact(&cuboid, &pose, black_box(p)))
-                .count()
-        })
-    });
+    let shapes: [(&str, &dyn Shape); 2] = [("ball", &ball), ("cuboid", &cuboid)];
+    for (name, shape) in shapes {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                points
+                    .iter()
+                    .filter_map(|&p| contact(shape, &pose, black_box(p)))
+                    .count()
+            })
+        });
+    }
     group.finish();
 }
 

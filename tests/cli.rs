@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{cloth3d, cloth3d_ok};
+use common::{cloth3d, cloth3d_ok, json_lines};
 
 #[test]
 fn run_json_prints_exactly_one_object_with_every_metric() {
@@ -140,10 +140,7 @@ fn compare_runs_every_integrator_and_writes_a_plot() {
         "--plot",
         plot.to_str().unwrap(),
     ]);
-    let rows: Vec<serde_json::Value> = stdout
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let rows = json_lines(&stdout);
     assert_eq!(rows.len(), 6, "{stdout}");
     for row in &rows {
         assert_eq!(row["stable"], true, "{row}");
@@ -267,10 +264,7 @@ fn bench_json_has_every_figure_and_plots_them() {
         "--plot",
         png.to_str().unwrap(),
     ]);
-    let rows: Vec<serde_json::Value> = stdout
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let rows = json_lines(&stdout);
     // Rapier's cloth and two integrators at each of two sizes.
     assert_eq!(rows.len(), 6, "{stdout}");
     for row in &rows {

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{cloth3d, cloth3d_ok};
+use common::{cloth3d, cloth3d_ok, json_lines};
 
 use cloth3d::scenes::{file, Scene, SceneKind, SceneOptions};
 use proptest::prelude::*;
@@ -311,10 +311,7 @@ fn compare_takes_a_scene_file() {
         "--plot",
         plot.to_str().unwrap(),
     ]);
-    let rows: Vec<serde_json::Value> = stdout
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let rows = json_lines(&stdout);
     assert_eq!(rows.len(), 6, "{stdout}");
     assert!(rows.iter().all(|r| r["stable"] == true), "{stdout}");
     let _ = std::fs::remove_file(&plot);
