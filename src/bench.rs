@@ -211,3 +211,86 @@ pub fn plot(rows: &[BenchRow], width: u32, height: u32) -> Result<image::RgbImag
     };
     crate::plot::draw(&[panel], "log10 particles", width, height)
 }
+
+/// How the rows compare with issue 7's targets, one line each, saying by how
+/// much a missed target is missed: spring evaluations of symplectic Euler at
+/// N = 128 (≥ 1e8/s), implicit Euler and fast mass-spring at N = 128
+/// (≤ 1/120 s a frame), and every cloth3d row against rapier's cloth (≥ 3×).
+pub fn target_lines(rows: &[BenchRow]) -> Vec<String> {
+    let verdict = |ratio: f64| {
+        if ratio >= 1.0 {
+            "met".to_string()
+        } else {
+            format!("missed by {:.1}x", 1.0 / ratio.max(1e-12))
+        }
+    };
+    let mut lines = Vec::new();
+    for row in rows.iter().filter(|r| r.engine == "cloth3d" && r.n == 128) {
+        if row.integrator == Integrator::SymplecticEuler.name() {
+            if let Some(s) = row.spring_evals_per_s {
+                lines.push(format!(
+                    "{} N=128 spring evaluations >= 1e8/s: {s:.2e}/s ({})",
+                    row.integrator,
+                    verdict(s / 1e8)
+                ));
+            }
+        }
+        if row.integrator == Integrator::ImplicitEuler.name()
+            || row.integrator == Integrator::FastMassSpring.name()
+        {
+            let ms = 1000.0 * row.frame_wall_s;
+            lines.push(format!(
+                "{} N=128 <= 8.33 ms a frame: {ms:.1} ms ({})",
+                row.integrator,
+                verdict(1000.0 / 120.0 / ms)
+            ));
+        }
+    }
+    for row in rows.iter().filter(|r| r.engine == "cloth3d") {
+        if let Some(x) = row.speedup_vs_rapier {
+            lines.push(format!(
+                "{} N={} >= 3x rapier's cloth: {x:.2}x ({})",
+                row.integrator,
+                row.n,
+                verdict(x / 3.0)
+            ));
+        }
+    }
+    lines
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(integrator: &str, frame_ms: f64, springs: Option<f64>) -> BenchRow {
+        BenchRow {
+            scene: "drape".into(),
+            n: 128,
+            engine: "cloth3d".into(),
+            integrator: integrator.into(),
+            threads: 1,
+            substeps: 1,
+            frame_wall_s: frame_ms / 1000.0,
+            particle_substeps_per_s: 1.0,
+            spring_evals_per_s: springs,
+            max_stretch: 0.01,
+            max_penetration: 0.0,
+            speedup_vs_rapier: Some(6.0),
+        }
+    }
+
+    #[test]
+    fn target_lines_say_by_how_much_a_target_is_missed() {
+        let lines = target_lines(&[
+            row("symplectic-euler", 100.0, Some(5.0e7)),
+            row("fast-mass-spring", 4.0, None),
+            row("implicit-euler", 25.0, None),
+        ]);
+        let find = |s: &str| lines.iter().find(|l| l.starts_with(s)).cloned().unwrap();
+        assert!(find("symplectic-euler N=128 spring").ends_with("(missed by 2.0x)"));
+        assert!(find("fast-mass-spring N=128 <=").ends_with("(met)"));
+        assert!(find("implicit-euler N=128 <=").ends_with("(missed by 3.0x)"));
+        assert!(find("implicit-euler N=128 >= 3x").ends_with("(met)"));
+    }
+}

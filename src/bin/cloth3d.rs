@@ -646,6 +646,15 @@ fn bench_rows(args: &BenchArgs) -> ExitCode {
             }
         }
     }
+    if !args.json {
+        let lines = cloth3d::bench::target_lines(&rows.borrow());
+        if !lines.is_empty() {
+            emit("\ntargets (issue 7):\n");
+            for line in lines {
+                emit(&format!("  {line}\n"));
+            }
+        }
+    }
     if let Some(path) = &args.plot {
         let written = cloth3d::bench::plot(&rows.borrow(), 900, 560)
             .and_then(|img| img.save(path).map_err(|e| e.to_string()));
