@@ -41,23 +41,24 @@ fn a_warmed_up_step_allocates_nothing() {
             let mut scene = scene_with(kind, 12, integrator);
             // Parallel evaluation would allocate in rayon's machinery.
             scene.cloth.params.parallel = false;
-            // Warm up until the drape lies on its ball: the measured steps
+            // Warm up until the drape reaches its ball: the measured steps
             // then have contacts, friction and, for fast mass-spring,
             // refactorisations of the global matrix.
-            for _ in 0..30 {
+            for _ in 0..18 {
                 scene.cloth.step(scene.dt, &scene.obstacles).unwrap();
             }
             let before = ALLOCATIONS.load(Ordering::Relaxed);
+            let mut contacts = 0;
             for _ in 0..5 {
-                scene.cloth.step(scene.dt, &scene.obstacles).unwrap();
+                contacts += scene
+                    .cloth
+                    .step(scene.dt, &scene.obstacles)
+                    .unwrap()
+                    .contacts;
             }
             let allocated = ALLOCATIONS.load(Ordering::Relaxed) - before;
             if kind == SceneKind::Drape {
-                assert!(
-                    scene.max_penetration() <= 0.002
-                        && scene.cloth.positions().iter().any(|p| p.length() < 0.32),
-                    "{integrator}: the drape is not on its ball yet"
-                );
+                assert!(contacts > 0, "{integrator}: no contact measured");
             }
             assert_eq!(
                 allocated,
