@@ -592,9 +592,9 @@ fn bench_rows(args: &BenchArgs) -> ExitCode {
             "vs rapier"
         ));
     }
-    let rows = std::cell::RefCell::new(Vec::new());
-    let print = |row: &BenchRow| {
-        rows.borrow_mut().push(row.clone());
+    let mut rows = Vec::new();
+    let mut print = |row: &BenchRow| {
+        rows.push(row.clone());
         if args.json {
             emit(&format!(
                 "{}\n",
@@ -647,7 +647,7 @@ fn bench_rows(args: &BenchArgs) -> ExitCode {
         }
     }
     if !args.json {
-        let lines = cloth3d::bench::target_lines(&rows.borrow());
+        let lines = cloth3d::bench::target_lines(&rows);
         if !lines.is_empty() {
             emit("\ntargets (issue 7):\n");
             for line in lines {
@@ -656,7 +656,7 @@ fn bench_rows(args: &BenchArgs) -> ExitCode {
         }
     }
     if let Some(path) = &args.plot {
-        let written = cloth3d::bench::plot(&rows.borrow(), 900, 560)
+        let written = cloth3d::bench::plot(&rows, 900, 560)
             .and_then(|img| img.save(path).map_err(|e| e.to_string()));
         if let Err(e) = written {
             eprintln!("error: {}: {e}", path.display());

@@ -15,4 +15,4 @@ mod response;
 pub use contact::{contact, penetration_depth, Contact};
 pub use obstacle::{DynamicBody, Obstacle, ObstacleImpulse};
 pub(crate) use resolve::Collider;
-pub(crate) use response::{respond, Response};
+pub(crate) use response::Response;

@@ -6,6 +6,7 @@ use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 use parry3d::query::Ray;
 
 use super::contact::contact;
+use super::response::{respond, Response};
 use super::{Contact, Obstacle, ObstacleImpulse};
 use crate::cloth::{Particles, SpringKind, Springs};
 use crate::math::{Pose, Rotation, Vector};
@@ -279,6 +280,27 @@ impl Collider {
                 }
             }
         }
+    }
+
+    /// How particle `i`'s contact from [`Collider::detect_contacts`] responds
+    /// over a substep of `h` seconds, for a solver that takes contacts into
+    /// its solve: `v` is its velocity and `accel` its acceleration under the
+    /// current forces (m/s²). Free unless it touches a fixed or kinematic
+    /// obstacle: a dynamic body would be treated as infinitely heavy and
+    /// thrown back.
+    pub fn response(&self, i: usize, v: Vector, accel: Vector, h: f32) -> Response {
+        if !(self.touching.get(i).copied().unwrap_or(false) && self.contact_immovable[i]) {
+            return Response::Free;
+        }
+        let rel = v - self.surface_velocity[i];
+        respond(
+            rel,
+            rel + accel * h,
+            self.contact_normal[i],
+            self.contact_gap[i],
+            self.contact_friction[i],
+            h,
+        )
     }
 
     /// Pushes free particles out to the thickness, positions only. Used

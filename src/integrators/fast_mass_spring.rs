@@ -16,7 +16,7 @@
 //! ends of a spring in every direction, not only along the spring.
 
 use crate::cloth::SpringKind;
-use crate::collision::{respond, Collider, Obstacle, Response};
+use crate::collision::{Collider, Obstacle, Response};
 use crate::error::ClothError;
 use crate::forces::{add_wind_forces, ForceModel};
 use crate::math::Vector;
@@ -55,7 +55,6 @@ pub(crate) struct FastMassSpringState {
     /// Per particle: the contact spring's pull at the end of the last substep
     /// (zero unless it was held), in the global step's units.
     held_force: Vec<Vector>,
-    values: Vec<f64>,
 }
 
 impl FastMassSpringState {
@@ -116,7 +115,6 @@ pub(crate) fn step(
         slide_impulse,
         force,
         held_force,
-        values,
         refactorizations,
         ..
     } = st;
@@ -135,37 +133,23 @@ pub(crate) fn step(
     force.resize(n, Vector::ZERO);
     held_force.resize(n, Vector::ZERO);
 
-    // Contacts now or within the substep, and how each responds: a particle
-    // held by static friction gets a stiff spring to where the surface
-    // carries it; a sliding one gets the kinetic friction impulse and is
-    // kept out by the projections.
+    // How each contact found by `Collider::detect_contacts` responds: a
+    // particle held by static friction gets a stiff spring to where the
+    // surface carries it; a sliding one gets the kinetic friction impulse and
+    // is kept out by the projections.
     let collider = &mut *contacts.collider;
-    collider.detect_contacts(
-        x,
-        v,
-        model.inv_mass,
-        contacts.obstacles,
-        contacts.thickness,
-        h,
-        model.gravity,
-    );
-    model.forces(x, v, force);
+    // The forces are needed only for the friction cone of a contact.
+    if !contacts.obstacles.is_empty() {
+        model.forces(x, v, force);
+    }
     for (r, &i) in factor.particle.iter().enumerate() {
         let i = i as usize;
         contact[r] = 0.0;
         held[r] = Vector::ZERO;
         slide_impulse[r] = Vector::ZERO;
-        // Only immovable obstacles are constraints of the solve: a dynamic
-        // body would be treated as infinitely heavy and thrown back.
-        if !(collider.touching[i] && collider.contact_immovable[i]) {
-            continue;
-        }
-        let nrm = collider.contact_normal[i];
-        let surface = collider.surface_velocity[i];
-        let rel = v[i] - surface;
-        let predicted = rel + force[i] * (h * model.inv_mass[i]);
+        let mut response = collider.response(i, v[i], force[i] * model.inv_mass[i], h);
+        let (nrm, surface) = (collider.contact_normal[i], collider.surface_velocity[i]);
         let mu = collider.contact_friction[i];
-        let mut response = respond(rel, predicted, nrm, collider.contact_gap[i], mu, h);
         // Static friction holds on while the force that held the particle in
         // the last substep stays inside the friction cone: the start-state
         // estimate alone sees every spring's pull, not what the cloth around
@@ -194,7 +178,7 @@ pub(crate) fn step(
             }
         }
     }
-    if factor.set_contacts(contact, values)? {
+    if factor.set_contacts(contact)? {
         *refactorizations += 1;
     }
     let factor = &*factor;

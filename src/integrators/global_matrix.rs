@@ -49,6 +49,8 @@ pub(crate) struct Factor {
     updates: usize,
     /// Dense scratch of the updates.
     work: Vec<f64>,
+    /// Scratch: the matrix's values with the contact weights, for a refactorisation.
+    values: Vec<f64>,
 }
 
 /// What a factor for this model and step depends on.
@@ -159,6 +161,7 @@ pub(crate) fn build_factor(model: &ForceModel, h: f32, n: usize) -> Result<Facto
         contact: vec![0.0; m],
         updates: 0,
         work: vec![0.0; m],
+        values: Vec::new(),
     })
 }
 
@@ -199,11 +202,7 @@ impl Factor {
     /// rows by sparse rank-one updates along the elimination tree (Davis and
     /// Hager), many by a numeric refactorisation with the same pattern.
     /// Returns whether the factor changed.
-    pub fn set_contacts(
-        &mut self,
-        contact: &[f64],
-        values: &mut Vec<f64>,
-    ) -> Result<bool, ClothError> {
+    pub fn set_contacts(&mut self, contact: &[f64]) -> Result<bool, ClothError> {
         if self.contact == contact {
             return Ok(false);
         }
@@ -221,18 +220,19 @@ impl Factor {
             for r in 0..m {
                 let delta = contact[r] - self.contact[r];
                 if delta != 0.0 && !self.rank_one(r, delta) {
-                    return self.refactor(contact, values);
+                    return self.refactor(contact);
                 }
                 self.contact[r] = contact[r];
             }
             self.updates += changed;
             return Ok(true);
         }
-        self.refactor(contact, values)
+        self.refactor(contact)
     }
 
     /// Factors the matrix with the weights `contact` afresh (same pattern).
-    fn refactor(&mut self, contact: &[f64], values: &mut Vec<f64>) -> Result<bool, ClothError> {
+    fn refactor(&mut self, contact: &[f64]) -> Result<bool, ClothError> {
+        let values = &mut self.values;
         values.clear();
         values.extend_from_slice(&self.base_values);
         for (r, &w) in contact.iter().enumerate() {
@@ -336,7 +336,6 @@ mod tests {
         );
         let h = 1.0 / 60.0;
         let mut updated = build_factor(&model, h, n * n).unwrap();
-        let mut values = Vec::new();
         let mut contact = vec![0.0; n * n];
         // Weights come and go on a few rows at a time, as contacts do.
         for round in 0..30usize {
@@ -348,14 +347,14 @@ mod tests {
                     0.0
                 };
             }
-            updated.set_contacts(&contact, &mut values).unwrap();
+            updated.set_contacts(&contact).unwrap();
         }
         assert!(
             updated.updates > 0,
             "the rows changed few at a time were updated"
         );
         let mut fresh = build_factor(&model, h, n * n).unwrap();
-        fresh.refactor(&contact, &mut values).unwrap();
+        fresh.refactor(&contact).unwrap();
         let (a, b) = (solution(&updated), solution(&fresh));
         let worst = a
             .iter()

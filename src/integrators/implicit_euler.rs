@@ -24,7 +24,7 @@
 use glam::Mat3;
 
 use crate::cloth::SpringKind;
-use crate::collision::{respond, Collider, Response};
+use crate::collision::{Collider, Response};
 use crate::forces::{add_wind_forces, ForceModel};
 use crate::math::Vector;
 
@@ -321,11 +321,14 @@ pub(crate) fn step(
     }
     // What the contact constraints did is momentum handed to the obstacles:
     // the force that holds a constrained particle, M acc − h f − J at the end.
-    for i in 0..n {
-        ve[i] = v[i] + acc[i];
-        xe[i] = x[i] + ve[i] * h;
+    let held = |f: &Filter| matches!(f, Filter::Plane(_) | Filter::Stick(_));
+    if st.filter.iter().any(held) {
+        for i in 0..n {
+            ve[i] = v[i] + acc[i];
+            xe[i] = x[i] + ve[i] * h;
+        }
+        model.forces(&xe, &ve, &mut st.f);
     }
-    model.forces(&xe, &ve, &mut st.f);
     for i in 0..n {
         if let Filter::Plane(nrm) | Filter::Stick(nrm) = st.filter[i] {
             let force = acc[i] * model.mass[i] - st.f[i] * h - st.friction[i];
@@ -368,16 +371,10 @@ fn constrain(
     for i in 0..n {
         let (filter, z) = if model.inv_mass[i] == 0.0 {
             (Filter::Fixed, Vector::ZERO)
-        } else if contacts.touching.get(i).copied().unwrap_or(false)
-            && contacts.contact_immovable[i]
-        {
-            // Only immovable obstacles are constraints of the solve: a dynamic
-            // body would be treated as infinitely heavy and thrown back.
+        } else {
             let nrm = contacts.contact_normal[i];
             let rel = v[i] - contacts.surface_velocity[i];
-            let predicted = rel + st.f[i] * (h / model.mass[i]);
-            let mu = contacts.contact_friction[i];
-            match respond(rel, predicted, nrm, contacts.contact_gap[i], mu, h) {
+            match contacts.response(i, v[i], st.f[i] / model.mass[i], h) {
                 Response::Free => (Filter::Free, Vector::ZERO),
                 Response::Stick { velocity } => (Filter::Stick(nrm), velocity - rel),
                 Response::Slide {
@@ -388,8 +385,6 @@ fn constrain(
                     (Filter::Plane(nrm), nrm * (normal_velocity - rel.dot(nrm)))
                 }
             }
-        } else {
-            (Filter::Free, Vector::ZERO)
         };
         st.filter[i] = filter;
         st.z[i] = z;

@@ -193,21 +193,24 @@ pub(crate) fn substep(
     let (x, v) = (&mut particles.x, &mut particles.v);
     particles.x_prev.copy_from_slice(x);
     let params = &cloth.params;
+    if !params.integrator.is_explicit() {
+        // The implicit solvers take contacts (now or within the substep) into their solve.
+        workspace.collider.detect_contacts(
+            x,
+            v,
+            &particles.inv_mass,
+            obstacles,
+            params.thickness,
+            h,
+            params.gravity,
+        );
+    }
     match params.integrator {
         Integrator::ExplicitEuler => explicit_euler::step(&model, x, v, workspace, h),
         Integrator::SymplecticEuler => symplectic_euler::step(&model, x, v, workspace, h),
         Integrator::Verlet => verlet::step(&model, x, v, workspace, h),
         Integrator::Rk4 => rk4::step(&model, x, v, workspace, h),
         Integrator::ImplicitEuler => {
-            workspace.collider.detect_contacts(
-                x,
-                v,
-                &particles.inv_mass,
-                obstacles,
-                params.thickness,
-                h,
-                params.gravity,
-            );
             return Ok(implicit_euler::step(
                 &model,
                 x,
