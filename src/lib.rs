@@ -47,7 +47,7 @@ pub use cloth::{
 };
 pub use collision::Obstacle;
 pub use error::ClothError;
-pub use integrators::Integrator;
+pub use integrators::{Integrator, Preconditioner};
 pub use pipeline::StepReport;
 pub use scenes::{Scene, SceneDesc, SceneKind};
 
@@ -64,7 +64,7 @@ pub mod prelude {
     };
     pub use crate::collision::Obstacle;
     pub use crate::error::ClothError;
-    pub use crate::integrators::Integrator;
+    pub use crate::integrators::{Integrator, Preconditioner};
     pub use crate::math::{Pose, Rotation, Vector};
     pub use crate::pipeline::StepReport;
 }

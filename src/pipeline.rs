@@ -97,6 +97,7 @@ impl Cloth {
                 h,
                 params.thickness,
                 params.edge_collisions,
+                params.integrator.is_explicit(),
             );
         }
         if !self.state_is_sane() {

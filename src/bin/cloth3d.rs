@@ -5,7 +5,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 use cloth3d::cloth::{Material, PinPreset, Substeps};
-use cloth3d::integrators::Integrator;
+use cloth3d::integrators::{Integrator, Preconditioner};
 use cloth3d::metrics::{run_with, RunMetrics};
 use cloth3d::scenes::{file, Scene, SceneKind, SceneOptions};
 
@@ -156,6 +156,10 @@ struct RunArgs {
     /// Relative residual at which conjugate gradient stops (implicit-euler).
     #[arg(long, value_parser = parse_positive, allow_hyphen_values = true)]
     cg_tolerance: Option<f32>,
+    /// Conjugate-gradient preconditioner (implicit-euler): block-jacobi or
+    /// spring-space (converges for very stiff springs, costlier per iteration).
+    #[arg(long, value_parser = parse_preconditioner)]
+    preconditioner: Option<Preconditioner>,
     /// Write the cloth of every frame as DIR/frame_0001.obj, ... (Blender's OBJ sequence import).
     #[arg(long, value_name = "DIR")]
     export_obj: Option<std::path::PathBuf>,
@@ -182,6 +186,9 @@ fn parse_scene(s: &str) -> Result<SceneKind, String> {
 }
 fn parse_integrator(s: &str) -> Result<Integrator, String> {
     Integrator::from_name(s).map_err(|e| e.to_string())
+}
+fn parse_preconditioner(s: &str) -> Result<Preconditioner, String> {
+    Preconditioner::from_name(s).map_err(|e| e.to_string())
 }
 fn parse_material(s: &str) -> Result<Material, String> {
     Material::by_name(s).map_err(|e| e.to_string())
@@ -400,6 +407,9 @@ fn run_command(args: RunArgs) -> ExitCode {
     }
     if let Some(tol) = args.cg_tolerance {
         params.cg_tolerance = tol;
+    }
+    if let Some(p) = args.preconditioner {
+        params.preconditioner = p;
     }
     if let Some(it) = args.fms_iterations {
         params.fms_iterations = it;

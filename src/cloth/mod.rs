@@ -13,7 +13,7 @@ pub use springs::{Spring, SpringKind, Springs};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{finite_vec, non_negative, positive, ClothError};
-use crate::integrators::{Integrator, Workspace};
+use crate::integrators::{Integrator, Preconditioner, Workspace};
 use crate::math::Vector;
 
 /// The particles of a cloth, as structure-of-arrays.
@@ -32,6 +32,13 @@ pub struct Particles {
     pub(crate) mass: Vec<f32>,
     /// Inverse masses, in 1/kg; 0 for a pinned particle.
     pub(crate) inv_mass: Vec<f32>,
+    /// Per particle: the pull (in the fast mass-spring solver's units) with
+    /// which static friction held it on a surface in the last substep, zero
+    /// when not held; the next substep keeps the hold while it stays in the
+    /// friction cone. Part of the state, so a snapshot resumes bit for bit;
+    /// empty until that solver runs.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub(crate) held_force: Vec<Vector>,
 }
 
 impl Particles {
@@ -137,6 +144,9 @@ pub struct SimulationParams {
     pub cg_max_iterations: u32,
     /// Relative residual at which conjugate gradient stops.
     pub cg_tolerance: f32,
+    /// Preconditioner of that conjugate gradient.
+    #[serde(default)]
+    pub preconditioner: Preconditioner,
     /// Local/global iterations of the fast mass-spring solver.
     pub fms_iterations: u32,
     /// Also keep stretch and shear springs (not only particles) out of obstacles,
@@ -164,6 +174,7 @@ impl Default for SimulationParams {
             newton_iterations: 2,
             cg_max_iterations: 100,
             cg_tolerance: 1e-4,
+            preconditioner: Preconditioner::BlockJacobi,
             fms_iterations: 10,
             edge_collisions: true,
             parallel: true,
@@ -344,6 +355,7 @@ impl Cloth {
                 x: positions,
                 mass: masses,
                 inv_mass,
+                held_force: Vec::new(),
             },
             springs: Springs::from_list(springs),
             triangles,

@@ -324,8 +324,35 @@ impl Collider {
         }
     }
 
+    /// The deepest obstacle the point `x` is closer than `thickness` to:
+    /// its index, the surface normal and how far `x` must move along it, in
+    /// metres. Used by solvers that add contacts found during their solve.
+    pub(crate) fn penetration(
+        &mut self,
+        x: Vector,
+        obstacles: &[Obstacle],
+        thickness: f32,
+    ) -> Option<(usize, Vector, f32)> {
+        self.gather(x);
+        let mut deepest = None;
+        for c in 0..self.candidates.len() {
+            let o = self.candidates[c] as usize;
+            let Some(contact) = contact(&*obstacles[o].shape, &self.poses[o], x) else {
+                continue;
+            };
+            let depth = thickness - contact.signed_distance;
+            if depth > 0.0 && deepest.is_none_or(|(_, _, d)| depth > d) {
+                deepest = Some((o, contact.normal, depth));
+            }
+        }
+        deepest
+    }
+
     /// Resolves every contact after a substep of `h` seconds, with the
-    /// obstacles where [`Collider::set_time`] put them.
+    /// obstacles where [`Collider::set_time`] put them. With `friction`,
+    /// Coulomb friction acts on the touching particles; without, they are
+    /// only put back on the surface, for solvers that decided friction
+    /// inside their solve.
     #[allow(clippy::too_many_arguments)]
     pub fn resolve(
         &mut self,
@@ -335,6 +362,7 @@ impl Collider {
         h: f32,
         thickness: f32,
         edges: bool,
+        friction: bool,
     ) -> u32 {
         if obstacles.is_empty() {
             return 0;
@@ -366,7 +394,9 @@ impl Collider {
                 if particles.inv_mass[i] != 0.0
                     && contact.signed_distance < thickness + CONTACT_SLACK
                 {
-                    self.resolve_particle(particles, i, obstacles, o, contact, h, thickness);
+                    self.resolve_particle(
+                        particles, i, obstacles, o, contact, h, thickness, friction,
+                    );
                     contacts += 1;
                 }
             }
@@ -463,6 +493,7 @@ impl Collider {
         c: Contact,
         h: f32,
         thickness: f32,
+        friction: bool,
     ) {
         let obstacle = &obstacles[o];
         let n = c.normal;
@@ -475,8 +506,14 @@ impl Collider {
         let removed = (-vn).max(0.0);
         let rel_t = rel - n * vn;
         let slip = rel_t.length();
-        let limit = obstacle.friction * removed;
-        let rel_t_new = if slip <= limit {
+        let limit = if friction {
+            obstacle.friction * removed
+        } else {
+            f32::INFINITY
+        };
+        let rel_t_new = if !friction {
+            rel_t
+        } else if slip <= limit {
             Vector::ZERO
         } else {
             rel_t * (1.0 - limit / slip)

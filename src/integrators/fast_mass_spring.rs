@@ -16,12 +16,13 @@
 //! ends of a spring in every direction, not only along the spring.
 
 use crate::cloth::SpringKind;
-use crate::collision::{Collider, Obstacle, Response};
+use crate::collision::Response;
 use crate::error::ClothError;
 use crate::forces::{add_wind_forces, ForceModel};
 use crate::math::Vector;
 
 use super::global_matrix::{build_factor, key, weight, Factor};
+use super::Contacts;
 
 /// Weight of a particle held by static friction in the global matrix, as a
 /// multiple of its own diagonal entry (its mass plus its springs' weights):
@@ -52,9 +53,6 @@ pub(crate) struct FastMassSpringState {
     slide_impulse: Vec<Vector>,
     /// Forces at the start of the substep (N).
     force: Vec<Vector>,
-    /// Per particle: the contact spring's pull at the end of the last substep
-    /// (zero unless it was held), in the global step's units.
-    held_force: Vec<Vector>,
 }
 
 impl FastMassSpringState {
@@ -71,13 +69,6 @@ fn add(a: &mut [f64; 3], v: Vector, s: f64) {
     a[2] += v.z as f64 * s;
 }
 
-/// The obstacles, for projecting the iterates out of them.
-pub(crate) struct Contacts<'a> {
-    pub collider: &'a mut Collider,
-    pub obstacles: &'a [Obstacle],
-    pub thickness: f32,
-}
-
 /// One substep of `h` seconds with `iterations` local/global iterations.
 ///
 /// Contacts and friction enter the solve: every particle that touches a
@@ -89,11 +80,14 @@ pub(crate) struct Contacts<'a> {
 /// new set of held particles costs a numeric refactorisation with the same
 /// pattern. A sliding one gets the kinetic friction impulse. After every
 /// global step the particles are projected out of the obstacles' surfaces.
+/// `held_force` is the particles' hold memory (see `Particles::held_force`).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn step(
     model: &ForceModel,
     x: &mut [Vector],
     v: &mut [Vector],
     st: &mut FastMassSpringState,
+    held_force: &mut Vec<Vector>,
     contacts: Contacts,
     h: f32,
     iterations: u32,
@@ -114,7 +108,6 @@ pub(crate) fn step(
         held,
         slide_impulse,
         force,
-        held_force,
         refactorizations,
         ..
     } = st;

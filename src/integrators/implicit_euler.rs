@@ -3,7 +3,9 @@
 //!
 //! The spring and damping forces are linearised about the current state and
 //! `(M − h ∂f/∂v − h² ∂f/∂x) Δv = h (f + h ∂f/∂x v)` is solved for the
-//! velocity change with a block-Jacobi preconditioned conjugate gradient. The
+//! velocity change with a preconditioned conjugate gradient (block Jacobi,
+//! or the [`spring_space`](super::spring_space) preconditioner, which stays
+//! fast however stiff the springs). The
 //! system is kept in block-sparse form: one symmetric 3×3 block per spring
 //! (`h D + h² K`) plus the lumped masses on the diagonal, never a dense matrix.
 //! Pins and contacts are constraints of the solve, enforced by the paper's
@@ -20,6 +22,12 @@
 //! backward-Euler objective ([`objective`]), each followed by a line search
 //! that only accepts a step that lowers it, so re-linearising can never make
 //! the step worse.
+//!
+//! A particle the step carries into an obstacle although it was free at the
+//! start (pulled there by its neighbours) is put on the surface and
+//! constrained to its tangent plane, and the solve goes on with it (up to
+//! [`CONTACT_ROUNDS`] more linearisations). Pushing it out after the solve
+//! instead would stretch a stiff spring by the whole penetration.
 
 use glam::Mat3;
 
@@ -27,6 +35,13 @@ use crate::cloth::SpringKind;
 use crate::collision::{Collider, Response};
 use crate::forces::{add_wind_forces, ForceModel};
 use crate::math::Vector;
+
+use super::spring_space::{Free, SpringSpace};
+use super::{Contacts, Preconditioner};
+
+/// Newton iterations past `newton_iterations` allowed for contacts that the
+/// step itself ran into.
+const CONTACT_ROUNDS: u32 = 4;
 
 /// What constrains a particle during the solve.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -78,6 +93,9 @@ pub(crate) struct ImplicitState {
     ve: Vec<Vector>,
     acc: Vec<Vector>,
     trial: Vec<Vector>,
+    /// The stiff springs' preconditioner, and whether it is set up for this step.
+    spring_space: SpringSpace,
+    spring_space_ready: bool,
 }
 
 impl ImplicitState {
@@ -238,17 +256,19 @@ fn objective(
 }
 
 /// One backward-Euler substep of `h` seconds by Newton's method with a line
-/// search: up to `newton` linearisations, the first being Baraff and
-/// Witkin's single linear solve. Returns the CG iterations used.
+/// search: `newton` linearisations, the first being Baraff and Witkin's
+/// single linear solve, and up to [`CONTACT_ROUNDS`] more while the step
+/// still runs into obstacles. Returns the CG iterations used.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn step(
     model: &ForceModel,
     x: &mut [Vector],
     v: &mut [Vector],
     st: &mut ImplicitState,
-    contacts: &mut Collider,
+    mut contacts: Contacts,
     h: f32,
     newton: u32,
+    preconditioner: Preconditioner,
     max_iterations: u32,
     tolerance: f32,
 ) -> u32 {
@@ -270,7 +290,8 @@ pub(crate) fn step(
     add_wind_forces(model.triangles, &model.wind, x, &mut st.external);
     let mut iterations = 0;
     let mut phi = f64::INFINITY;
-    for round in 0..newton.max(1) {
+    let (mut round, mut extra) = (0u32, 0u32);
+    loop {
         if round == 0 {
             // Baraff and Witkin's step: linearised at the start of the step.
             xe.copy_from_slice(x);
@@ -284,13 +305,13 @@ pub(crate) fn step(
         assemble(model, &xe, &ve, &acc, round == 0, h, st);
         if round == 0 {
             // The constraints, from the start state (`st.f` holds its forces).
-            constrain(model, v, st, contacts, h);
+            constrain(model, v, st, contacts.collider, h);
         }
         for i in 0..n {
             st.b[i] += st.friction[i];
             st.dv[i] = if round == 0 { st.z[i] } else { Vector::ZERO };
         }
-        iterations += solve(model, st, max_iterations, tolerance);
+        iterations += solve(model, &xe, st, preconditioner, h, max_iterations, tolerance);
         if round == 0 {
             // The constraints' own part of the change is taken whole.
             acc.copy_from_slice(&st.z);
@@ -314,10 +335,24 @@ pub(crate) fn step(
             }
             alpha *= 0.5;
         }
-        if !accepted {
+        if accepted {
+            std::mem::swap(&mut acc, &mut trial);
+        }
+        round += 1;
+        // Contacts the step ran into are constraints from now on.
+        let added = activate(model, x, v, &mut acc, st, &mut contacts, h);
+        if added {
+            phi = objective(model, x, v, &acc, st, h);
+        }
+        if !accepted && !added {
             break;
         }
-        std::mem::swap(&mut acc, &mut trial);
+        if round >= newton.max(1) {
+            if !added || extra >= CONTACT_ROUNDS {
+                break;
+            }
+            extra += 1;
+        }
     }
     // What the contact constraints did is momentum handed to the obstacles:
     // the force that holds a constrained particle, M acc − h f − J at the end.
@@ -338,7 +373,8 @@ pub(crate) fn step(
                 Filter::Stick(_) => force,
                 _ => nrm * nrm.dot(force),
             };
-            contacts.add_impulse(contacts.contact_obstacle[i] as usize, x[i], -reaction);
+            let obstacle = contacts.collider.contact_obstacle[i] as usize;
+            contacts.collider.add_impulse(obstacle, x[i], -reaction);
         }
     }
     for i in 0..n {
@@ -353,6 +389,46 @@ pub(crate) fn step(
     st.acc = acc;
     st.trial = trial;
     iterations
+}
+
+/// Finds the free particles whose end of step `x + h (v + acc)` lies inside
+/// the thickness of a fixed or kinematic obstacle, puts them on its surface (changing `acc` along
+/// the normal) and constrains them there, sliding without friction, for the
+/// rest of the solve. Returns true when it found any.
+fn activate(
+    model: &ForceModel,
+    x: &[Vector],
+    v: &[Vector],
+    acc: &mut [Vector],
+    st: &mut ImplicitState,
+    contacts: &mut Contacts,
+    h: f32,
+) -> bool {
+    if contacts.obstacles.is_empty() {
+        return false;
+    }
+    let mut added = false;
+    for i in 0..x.len() {
+        if st.filter[i] != Filter::Free || model.inv_mass[i] == 0.0 {
+            continue;
+        }
+        let end = x[i] + (v[i] + acc[i]) * h;
+        if let Some((o, nrm, depth)) =
+            contacts
+                .collider
+                .penetration(end, contacts.obstacles, contacts.thickness)
+        {
+            // A dynamic body answers through the contact pass after the step.
+            if contacts.obstacles[o].body.is_some() {
+                continue;
+            }
+            acc[i] += nrm * (depth / h);
+            st.filter[i] = Filter::Plane(nrm);
+            contacts.collider.contact_obstacle[i] = o as u32;
+            added = true;
+        }
+    }
+    added
 }
 
 /// Sets the constraints of the step from the start state: pins fix the
@@ -393,9 +469,35 @@ fn constrain(
 
 /// Solves the assembled system for `st.dv` by modified preconditioned
 /// conjugate gradient, from the guess in `st.dv`, with the filters in
-/// `st.filter`. Returns the iterations used.
-fn solve(model: &ForceModel, st: &mut ImplicitState, max_iterations: u32, tolerance: f32) -> u32 {
+/// `st.filter`, preconditioned by block Jacobi or, when asked for and some
+/// springs are stiff, the spring-space preconditioner set up for the
+/// linearisation point `xe`. Returns the iterations used.
+fn solve(
+    model: &ForceModel,
+    xe: &[Vector],
+    st: &mut ImplicitState,
+    preconditioner: Preconditioner,
+    h: f32,
+    max_iterations: u32,
+    tolerance: f32,
+) -> u32 {
     let n = st.dv.len();
+    st.spring_space_ready = false;
+    if preconditioner == Preconditioner::SpringSpace {
+        let filter = &st.filter;
+        st.spring_space_ready = st.spring_space.update(
+            model,
+            xe,
+            &st.blocks,
+            &st.mass,
+            |i| match filter[i] {
+                Filter::Free => Free::All,
+                Filter::Plane(nrm) => Free::Plane(nrm),
+                Filter::Fixed | Filter::Stick(_) => Free::None,
+            },
+            h,
+        );
+    }
     for i in 0..n {
         st.precond[i] = if matches!(st.filter[i], Filter::Fixed | Filter::Stick(_)) {
             Mat3::IDENTITY
@@ -415,17 +517,33 @@ fn solve(model: &ForceModel, st: &mut ImplicitState, max_iterations: u32, tolera
         c,
         q,
         s,
+        spring_space,
+        spring_space_ready,
         ..
     } = st;
+    // out = filter(P⁻¹ x).
+    let mut precondition = |x: &[Vector], out: &mut [Vector]| {
+        if *spring_space_ready {
+            // Set up at the step's start: contacts found since are filtered here.
+            spring_space.apply(model, x, out);
+            for i in 0..n {
+                out[i] = filter[i].apply(out[i]);
+            }
+        } else {
+            for i in 0..n {
+                out[i] = filter[i].apply(precond[i] * x[i]);
+            }
+        }
+    };
     // r = filter(b − A Δv), c = filter(P⁻¹ r), δ₀ = filter(b)ᵀ P⁻¹ filter(b).
     multiply(model, blocks, mass, filter, dv, q);
-    let mut delta0 = 0.0f64;
     for i in 0..n {
-        let fb = filter[i].apply(b[i]);
-        delta0 += fb.as_dvec3().dot((precond[i] * fb).as_dvec3());
-        r[i] = fb - q[i];
-        c[i] = filter[i].apply(precond[i] * r[i]);
+        s[i] = filter[i].apply(b[i]);
+        r[i] = s[i] - q[i];
     }
+    precondition(s, q);
+    let delta0 = dot(s, q);
+    precondition(r, c);
     let mut delta_new = dot(r, c);
     let eps2 = (tolerance as f64) * (tolerance as f64);
     let mut iterations = 0;
@@ -439,8 +557,8 @@ fn solve(model: &ForceModel, st: &mut ImplicitState, max_iterations: u32, tolera
         for i in 0..n {
             dv[i] += c[i] * alpha;
             r[i] -= q[i] * alpha;
-            s[i] = precond[i] * r[i];
         }
+        precondition(r, s);
         let delta_old = delta_new;
         delta_new = dot(r, s);
         let beta = (delta_new / delta_old) as f32;
