@@ -181,6 +181,28 @@ fn field_suffix(field: &str) -> String {
     }
 }
 
+/// Finds the choice among `all` whose `name` is `name` (case-insensitive),
+/// or says which `what` names are valid.
+pub(crate) fn by_name<T: Copy>(
+    all: &[T],
+    name_of: fn(T) -> &'static str,
+    what: &'static str,
+    name: &str,
+) -> Result<T, ClothError> {
+    all.iter()
+        .copied()
+        .find(|&c| name_of(c).eq_ignore_ascii_case(name))
+        .ok_or_else(|| ClothError::UnknownName {
+            what,
+            name: name.to_string(),
+            valid: all
+                .iter()
+                .map(|&c| name_of(c))
+                .collect::<Vec<_>>()
+                .join(", "),
+        })
+}
+
 /// serde checks for numeric fields of scene files and snapshots, so that a bad
 /// value is reported with its line and field while the file is read.
 pub(crate) mod de {

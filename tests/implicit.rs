@@ -5,7 +5,7 @@ mod common;
 use cloth3d::metrics::run;
 use cloth3d::prelude::*;
 use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
-use common::oscillator;
+use common::{max_distance, oscillator};
 
 #[test]
 fn implicit_euler_never_adds_energy_to_an_undamped_system() {
@@ -76,11 +76,7 @@ fn implicit_solvers_reach_the_same_equilibrium_as_small_step_symplectic_euler() 
     let reference = hanging_equilibrium(Integrator::SymplecticEuler, Substeps::Auto, 900);
     for integrator in [Integrator::ImplicitEuler, Integrator::FastMassSpring] {
         let rest = hanging_equilibrium(integrator, Substeps::Fixed(1), 900);
-        let worst = reference
-            .iter()
-            .zip(&rest)
-            .map(|(a, b)| (*a - *b).length())
-            .fold(0.0, f32::max);
+        let worst = max_distance(&reference, &rest);
         assert!(
             worst < 0.001,
             "{integrator}: {worst} m from the reference equilibrium"
@@ -243,11 +239,7 @@ fn the_spring_space_preconditioner_converges_whatever_the_stiffness() {
     for k in [1.0e4f32, 1.0e5, 1.0e6] {
         let (jacobi, xj) = stiff_curtain_step(k, Preconditioner::BlockJacobi);
         let (spring, xs) = stiff_curtain_step(k, Preconditioner::SpringSpace);
-        let worst = xj
-            .iter()
-            .zip(&xs)
-            .map(|(a, b)| (*a - *b).length())
-            .fold(0.0, f32::max);
+        let worst = max_distance(&xj, &xs);
         println!(
             "k = {k}: block Jacobi {jacobi}, spring space {spring} iterations; {worst} m apart"
         );

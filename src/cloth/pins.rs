@@ -57,14 +57,7 @@ impl PinPreset {
 
     /// Looks a preset up by its name.
     pub fn from_name(name: &str) -> Result<Self, ClothError> {
-        Self::ALL
-            .into_iter()
-            .find(|p| p.name().eq_ignore_ascii_case(name))
-            .ok_or_else(|| ClothError::UnknownName {
-                what: "pin preset",
-                name: name.to_string(),
-                valid: Self::ALL.map(|p| p.name()).join(", "),
-            })
+        crate::error::by_name(&Self::ALL, Self::name, "pin preset", name)
     }
 
     /// The `(row, column)` cells pinned on a `cols × rows` grid.

@@ -68,14 +68,7 @@ impl Integrator {
 
     /// Looks an integrator up by name.
     pub fn from_name(name: &str) -> Result<Self, ClothError> {
-        Self::ALL
-            .into_iter()
-            .find(|i| i.name().eq_ignore_ascii_case(name))
-            .ok_or_else(|| ClothError::UnknownName {
-                what: "integrator",
-                name: name.to_string(),
-                valid: Self::ALL.map(|i| i.name()).join(", "),
-            })
+        crate::error::by_name(&Self::ALL, Self::name, "integrator", name)
     }
 
     /// True for the explicit methods, whose step is limited by stability.
@@ -146,14 +139,7 @@ impl Preconditioner {
 
     /// Looks a preconditioner up by name.
     pub fn from_name(name: &str) -> Result<Self, ClothError> {
-        Self::ALL
-            .into_iter()
-            .find(|p| p.name().eq_ignore_ascii_case(name))
-            .ok_or_else(|| ClothError::UnknownName {
-                what: "preconditioner",
-                name: name.to_string(),
-                valid: Self::ALL.map(|p| p.name()).join(", "),
-            })
+        crate::error::by_name(&Self::ALL, Self::name, "preconditioner", name)
     }
 }
 

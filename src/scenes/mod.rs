@@ -84,14 +84,7 @@ impl SceneKind {
 
     /// Looks a scene up by name.
     pub fn from_name(name: &str) -> Result<Self, ClothError> {
-        Self::ALL
-            .into_iter()
-            .find(|s| s.name().eq_ignore_ascii_case(name))
-            .ok_or_else(|| ClothError::UnknownName {
-                what: "scene",
-                name: name.to_string(),
-                valid: Self::ALL.map(|s| s.name()).join(", "),
-            })
+        crate::error::by_name(&Self::ALL, Self::name, "scene", name)
     }
 
     /// The pin variants the scene accepts (empty when it takes none).

@@ -99,3 +99,11 @@ pub fn json_lines(stdout: &str) -> Vec<serde_json::Value> {
         .map(|l| serde_json::from_str(l).unwrap())
         .collect()
 }
+
+/// The largest distance between matching points of two lists, in metres.
+pub fn max_distance(a: &[Vector], b: &[Vector]) -> f32 {
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0, f32::max)
+}
