@@ -506,11 +506,7 @@ impl Collider {
         let removed = (-vn).max(0.0);
         let rel_t = rel - n * vn;
         let slip = rel_t.length();
-        let limit = if friction {
-            obstacle.friction * removed
-        } else {
-            f32::INFINITY
-        };
+        let limit = obstacle.friction * removed;
         let rel_t_new = if !friction {
             rel_t
         } else if slip <= limit {

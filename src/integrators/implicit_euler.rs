@@ -36,7 +36,7 @@ use crate::collision::{Collider, Response};
 use crate::forces::{add_wind_forces, ForceModel};
 use crate::math::Vector;
 
-use super::spring_space::{Free, SpringSpace};
+use super::spring_space::SpringSpace;
 use super::{Contacts, Preconditioner};
 
 /// Newton iterations past `newton_iterations` allowed for contacts that the
@@ -45,7 +45,7 @@ const CONTACT_ROUNDS: u32 = 4;
 
 /// What constrains a particle during the solve.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Filter {
+pub(super) enum Filter {
     /// Free in every direction.
     Free,
     /// Pinned: no velocity change.
@@ -93,9 +93,8 @@ pub(crate) struct ImplicitState {
     ve: Vec<Vector>,
     acc: Vec<Vector>,
     trial: Vec<Vector>,
-    /// The stiff springs' preconditioner, and whether it is set up for this step.
+    /// The stiff springs' preconditioner.
     spring_space: SpringSpace,
-    spring_space_ready: bool,
 }
 
 impl ImplicitState {
@@ -482,28 +481,18 @@ fn solve(
     tolerance: f32,
 ) -> u32 {
     let n = st.dv.len();
-    st.spring_space_ready = false;
-    if preconditioner == Preconditioner::SpringSpace {
-        let filter = &st.filter;
-        st.spring_space_ready = st.spring_space.update(
-            model,
-            xe,
-            &st.blocks,
-            &st.mass,
-            |i| match filter[i] {
-                Filter::Free => Free::All,
-                Filter::Plane(nrm) => Free::Plane(nrm),
-                Filter::Fixed | Filter::Stick(_) => Free::None,
-            },
-            h,
-        );
-    }
-    for i in 0..n {
-        st.precond[i] = if matches!(st.filter[i], Filter::Fixed | Filter::Stick(_)) {
-            Mat3::IDENTITY
-        } else {
-            st.diag[i].inverse()
-        };
+    let spring_space_ready = preconditioner == Preconditioner::SpringSpace
+        && st
+            .spring_space
+            .update(model, xe, &st.blocks, &st.mass, &st.filter, h);
+    if !spring_space_ready {
+        for i in 0..n {
+            st.precond[i] = if matches!(st.filter[i], Filter::Fixed | Filter::Stick(_)) {
+                Mat3::IDENTITY
+            } else {
+                st.diag[i].inverse()
+            };
+        }
     }
     // Modified preconditioned conjugate gradient (Baraff & Witkin, section 5.3).
     let ImplicitState {
@@ -518,13 +507,13 @@ fn solve(
         q,
         s,
         spring_space,
-        spring_space_ready,
         ..
     } = st;
     // out = filter(P⁻¹ x).
     let mut precondition = |x: &[Vector], out: &mut [Vector]| {
-        if *spring_space_ready {
-            // Set up at the step's start: contacts found since are filtered here.
+        if spring_space_ready {
+            // Its W already leaves the constrained directions out, up to
+            // rounding; the filter makes that exact.
             spring_space.apply(model, x, out);
             for i in 0..n {
                 out[i] = filter[i].apply(out[i]);

@@ -1,7 +1,8 @@
 //! A preconditioner for the implicit solve that takes stiff springs exactly.
 //!
-//! Block-Jacobi conjugate gradient needs about `√(h² k / m)` iterations: a
-//! thousand and more for stretch springs of 1e5–1e6 N/m on a light cloth at a
+//! Block-Jacobi conjugate gradient needs more iterations the stiffer the
+//! springs (about `√(h² k / m)`, until the grid's size bounds it), and stops
+//! short at its cap for stretch springs of 1e5–1e6 N/m on a light cloth at a
 //! 1/60 s step. Along its direction `d`, a spring adds the rank-one block
 //! `w d dᵀ` (`w = h c + h² k`) to the system matrix `A`. This preconditioner
 //! keeps those parts of the stiff kinds exactly and the rest of `A` by its
@@ -15,7 +16,7 @@
 //! respects the solve's filters. `G` has one row per stiff spring, couples
 //! the springs that share a particle, and its conditioning does not grow
 //! with the stiffness. Its pattern is ordered by nested dissection once per
-//! cloth; its values are factored by sparse Cholesky once per step.
+//! cloth; its values are factored by sparse Cholesky at every linearisation.
 
 use glam::{DMat3, DVec3, Mat3};
 use nalgebra_sparse::factorization::CscCholesky;
@@ -25,6 +26,7 @@ use crate::cloth::SpringKind;
 use crate::forces::ForceModel;
 use crate::math::Vector;
 
+use super::implicit_euler::Filter;
 use super::ordering::nested_dissection;
 
 /// A spring kind is taken exactly when `4 w` exceeds this many times the
@@ -51,16 +53,6 @@ pub(crate) struct SpringSpace {
     /// Scratch: `W r` per particle, and a vector over the rows.
     u: Vec<DVec3>,
     y: Vec<f64>,
-    /// Factorisations of `G` (values) done.
-    pub factorizations: u64,
-}
-
-/// What the solve's filter leaves free at a particle.
-#[derive(Debug, Clone, Copy)]
-pub(crate) enum Free {
-    All,
-    Plane(Vector),
-    None,
 }
 
 /// The kinds stiff enough, at step `h`, to be worth taking exactly.
@@ -165,8 +157,8 @@ impl SpringSpace {
     }
 
     /// Sets `P` up for the system linearised at `xe` with step `h`: `blocks`
-    /// are the springs' blocks of `A`, `mass` its diagonal masses, `free`
-    /// what each particle's filter leaves free. Returns false when no kind is
+    /// are the springs' blocks of `A`, `mass` its diagonal masses, `filter`
+    /// what constrains each particle in the solve. Returns false when no kind is
     /// stiff or the factorisation failed: block Jacobi then does the work.
     pub(crate) fn update(
         &mut self,
@@ -174,7 +166,7 @@ impl SpringSpace {
         xe: &[Vector],
         blocks: &[Mat3],
         mass: &[f32],
-        free: impl Fn(usize) -> Free,
+        filter: &[Filter],
         h: f32,
     ) -> bool {
         let kinds = stiff_kinds(model, h);
@@ -190,7 +182,7 @@ impl SpringSpace {
             mass.iter()
                 .map(|&m| DMat3::from_diagonal(DVec3::splat(m as f64))),
         );
-        let h = h as f64;
+        let hd = h as f64;
         for kind in SpringKind::ALL {
             let p = model.spring_params[kind.index()];
             for s in springs.range(kind) {
@@ -204,7 +196,7 @@ impl SpringSpace {
                     let t = (1.0 - springs.rest[s] as f64 / len).max(0.0);
                     let dir = d / len;
                     let ddt = DMat3::from_cols(dir * dir.x, dir * dir.y, dir * dir.z);
-                    (DMat3::IDENTITY - ddt) * (t * h * h * p.stiffness as f64)
+                    (DMat3::IDENTITY - ddt) * (t * hd * hd * p.stiffness as f64)
                 } else {
                     blocks[s].as_dmat3()
                 };
@@ -212,11 +204,11 @@ impl SpringSpace {
                 self.inv[j] += block;
             }
         }
-        for (p, w) in self.inv.iter_mut().enumerate() {
-            *w = match free(p) {
-                Free::None => DMat3::ZERO,
-                Free::All => w.inverse(),
-                Free::Plane(nrm) => {
+        for (w, f) in self.inv.iter_mut().zip(filter) {
+            *w = match *f {
+                Filter::Fixed | Filter::Stick(_) => DMat3::ZERO,
+                Filter::Free => w.inverse(),
+                Filter::Plane(nrm) => {
                     let inv = w.inverse();
                     let a = inv * nrm.as_dvec3();
                     let q = nrm.as_dvec3().dot(a);
@@ -229,7 +221,7 @@ impl SpringSpace {
             let kind = springs.kind(s);
             let (i, j) = (springs.a[s] as usize, springs.b[s] as usize);
             self.dir[r] = (xe[j] - xe[i]).as_dvec3().normalize_or_zero();
-            self.weight[r] = super::global_matrix::weight(model, kind, h as f32);
+            self.weight[r] = super::global_matrix::weight(model, kind, h);
         }
         // G = Ω⁻¹ + J W Jᵀ.
         for c in 0..self.spring.len() {
@@ -269,7 +261,6 @@ impl SpringSpace {
                 .is_some()
             }
         };
-        self.factorizations += 1;
         if !ok {
             // The next step starts from a fresh symbolic factorisation.
             self.chol = None;
