@@ -15,26 +15,29 @@ use std::hint::black_box;
 
 use cloth3d::collision::contact;
 use cloth3d::prelude::*;
+use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
 use criterion::{criterion_group, criterion_main, Criterion};
 use parry3d::shape::{Ball, Cuboid, Shape};
 
-/// A 64 × 64 cotton cloth dropped on a ball, 30 frames in (resting on it).
-fn draped(integrator: Integrator) -> (Cloth, Vec<Obstacle>) {
-    let ball = vec![Obstacle::ball(Vector::ZERO, 0.3)];
-    let mut cloth = ClothBuilder::new(64, 64)
-        .horizontal(Vector::new(0.0, 0.6, 0.0))
-        .build()
-        .expect("valid cloth");
-    cloth.set_integrator(integrator);
-    cloth.params.substeps = integrator.default_substeps();
+/// The catalogue's `drape` at 64 × 64 with `integrator`, 30 frames in (resting on its ball).
+fn draped(integrator: Integrator) -> Scene {
+    let mut scene = Scene::build(
+        SceneKind::Drape,
+        &SceneOptions {
+            n: Some(64),
+            integrator: Some(integrator),
+            ..Default::default()
+        },
+    )
+    .expect("valid scene");
     for _ in 0..30 {
-        cloth.step(1.0 / 60.0, &ball).expect("stable");
+        scene.step_frame().expect("stable");
     }
-    (cloth, ball)
+    scene
 }
 
 fn spring_forces(c: &mut Criterion) {
-    let (cloth, _) = draped(Integrator::SymplecticEuler);
+    let cloth = draped(Integrator::SymplecticEuler).cloth;
     let mut f = vec![Vector::ZERO; cloth.particle_count()];
     c.bench_function("spring_forces", |b| {
         b.iter(|| cloth.forces_into(black_box(&mut f)))
@@ -45,17 +48,19 @@ fn substep(c: &mut Criterion) {
     let mut group = c.benchmark_group("substep");
     group.sample_size(20);
     for integrator in Integrator::ALL {
-        let (mut cloth, ball) = draped(integrator);
-        let h = if integrator.is_explicit() {
-            1.0 / 60.0 / cloth.substeps_for(1.0 / 60.0) as f32
-        } else {
-            1.0 / 60.0
-        };
-        cloth.params.substeps = Substeps::Fixed(1);
-        // The same cloth, resting on the ball, step after step (a clone would
-        // start with empty scratch memory and no Cholesky factor).
+        let Scene {
+            mut cloth,
+            mut solver,
+            obstacles,
+            dt,
+            ..
+        } = draped(integrator);
+        let h = dt / solver.substeps_for(&cloth, dt) as f32;
+        solver.settings.substeps = Substeps::Fixed(1);
+        // The same cloth and solver, resting on the ball, step after step (a
+        // clone would start with empty scratch memory and no Cholesky factor).
         group.bench_function(integrator.name(), |b| {
-            b.iter(|| cloth.step(h, &ball).expect("stable"))
+            b.iter(|| solver.step(&mut cloth, h, &obstacles).expect("stable"))
         });
     }
     group.finish();
@@ -101,10 +106,10 @@ fn hundred_balls(c: &mut Criterion) {
         .horizontal(Vector::new(0.0, 0.005, 0.0))
         .build()
         .expect("valid cloth");
-    let h = 1.0 / 60.0 / cloth.substeps_for(1.0 / 60.0).max(1) as f32;
-    let mut cloth = cloth;
-    cloth.params.substeps = Substeps::Fixed(1);
-    let cloth = cloth;
+    let mut sim = Simulation::new(cloth);
+    let h = 1.0 / 60.0 / sim.substeps_for(1.0 / 60.0).max(1) as f32;
+    sim.solver.settings.substeps = Substeps::Fixed(1);
+    let cloth = sim;
     let mut group = c.benchmark_group("hundred_balls");
     group.sample_size(30);
     for (name, obstacles) in [

@@ -17,13 +17,15 @@ fn main() -> Result<(), ClothError> {
     materials.push(chainmail);
     for material in materials {
         let name = material.name.clone();
-        let mut cloth = ClothBuilder::new(24, 24)
-            .vertical(Vector::new(0.0, 1.0, 0.0))
-            .material(material)
-            .mass_from_density()
-            .pins(PinPreset::TwoCorners)
-            .integrator(Integrator::ImplicitEuler)
-            .build()?;
+        let mut cloth = Simulation::new(
+            ClothBuilder::new(24, 24)
+                .vertical(Vector::new(0.0, 1.0, 0.0))
+                .material(material)
+                .mass_from_density()
+                .pins(PinPreset::TwoCorners)
+                .build()?,
+        )
+        .with_integrator(Integrator::ImplicitEuler);
         for _ in 0..120 {
             cloth.step(1.0 / 60.0, &[])?;
         }

@@ -5,11 +5,13 @@
 use cloth3d::prelude::*;
 
 fn main() -> Result<(), ClothError> {
-    let mut cloth = ClothBuilder::new(48, 48)
-        .size(1.0, 1.0)
-        .horizontal(Vector::new(0.0, 0.6, 0.0))
-        .total_mass(1.0)
-        .build()?;
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(48, 48)
+            .size(1.0, 1.0)
+            .horizontal(Vector::new(0.0, 0.6, 0.0))
+            .total_mass(1.0)
+            .build()?,
+    );
     let ball = Obstacle::ball(Vector::ZERO, 0.3);
     for frame in 1..=120 {
         cloth.step(1.0 / 60.0, std::slice::from_ref(&ball))?;

@@ -5,12 +5,14 @@
 use cloth3d::prelude::*;
 
 fn main() -> Result<(), ClothError> {
-    let mut cloth = ClothBuilder::new(32, 20)
-        .size(1.6, 1.0)
-        .vertical(Vector::new(0.8, 1.5, 0.0))
-        .material(Material::silk())
-        .pins(PinPreset::FlagColumn)
-        .build()?;
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(32, 20)
+            .size(1.6, 1.0)
+            .vertical(Vector::new(0.8, 1.5, 0.0))
+            .material(Material::silk())
+            .pins(PinPreset::FlagColumn)
+            .build()?,
+    );
     cloth.params.wind = Wind::new(Vector::new(1.0, 0.0, 0.3), 8.0);
     for frame in 1..=240 {
         // Gusts: the wind strength breathes between 4 and 12 N/m².

@@ -5,10 +5,12 @@
 use cloth3d::prelude::*;
 
 fn main() -> Result<(), ClothError> {
-    let mut cloth = ClothBuilder::new(33, 33)
-        .horizontal(Vector::new(0.0, 0.6, 0.0))
-        .pins(PinPreset::FourCorners)
-        .build()?;
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(33, 33)
+            .horizontal(Vector::new(0.0, 0.6, 0.0))
+            .pins(PinPreset::FourCorners)
+            .build()?,
+    );
     for _ in 0..60 {
         cloth.step(1.0 / 60.0, &[])?;
     }

@@ -29,11 +29,13 @@ fn main() -> Result<(), ClothError> {
     );
 
     // The cloth, and the coupling that puts it in that world.
-    let mut cloth = ClothBuilder::new(40, 40)
-        .size(1.2, 1.2)
-        .horizontal(Vector::new(0.0, 1.0, 0.0))
-        .integrator(Integrator::SymplecticEuler)
-        .build()?;
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(40, 40)
+            .size(1.2, 1.2)
+            .horizontal(Vector::new(0.0, 1.0, 0.0))
+            .build()?,
+    )
+    .with_integrator(Integrator::SymplecticEuler);
     let mut coupling = RapierCoupling::new();
 
     for frame in 1..=180 {

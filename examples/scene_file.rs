@@ -9,8 +9,7 @@
 //! a file to start from; `cloth3d run path/to/scene.ron` runs one from the
 //! command line.
 
-use cloth3d::metrics;
-use cloth3d::scenes::{file, SceneOptions};
+use cloth3d::scenes::{run, Scene, SceneOptions};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args().nth(1).unwrap_or_else(|| {
@@ -22,10 +21,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     });
     // A bad file is reported with its line and field, for example
     // "line 12, column 19, field `cloth.material.Custom.stretch.stiffness`: invalid value -3000: ...".
-    let mut scene = file::load_scene(path.as_ref(), &SceneOptions::default())
-        .map_err(|e| format!("{path}: {e}"))?;
+    let mut scene = Scene::open(&path, &SceneOptions::default())?;
     let frames = scene.frames;
-    let m = metrics::run(&mut scene, frames)?;
+    let m = run(&mut scene, frames)?;
     println!(
         "{}: {} frames, {} particles, max stretch {:.2}%, max penetration {:.1} mm, lowest point y = {:.3} m",
         m.scene,

@@ -13,91 +13,62 @@
 //! N one frame · R reset · W wind · T spring trace · click a particle to
 //! select it · X pin/unpin it · Ctrl+drag to pull it · H help.
 
+use cloth3d::cli::args::SceneArgs;
 use cloth3d::prelude::*;
-use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
+use cloth3d::scenes::{Scene, SceneError, SceneKind, SceneOptions};
 use cloth3d::viewer::{self, SceneView, TraceMode};
 use kiss3d::egui;
 use kiss3d::prelude::*;
 
+/// The showcase's flags: the command's scene flags (same names, same range
+/// checks), the scene to open, and the headless screenshot.
+#[derive(clap::Parser)]
+#[command(
+    name = "showcase",
+    about = "cloth3d's canonical scenes in a window (or one headless screenshot)"
+)]
 struct Args {
-    screenshot: Option<String>,
-    frames: u32,
     /// A canonical scene's name or a scene file's path.
+    #[arg(long, default_value = "drape")]
     scene: String,
-    options: SceneOptions,
+    #[command(flatten)]
+    options: SceneArgs,
+    /// Render `--frames` frames (default 120) off screen to this PNG and exit.
+    #[arg(long, value_name = "FILE.png")]
+    screenshot: Option<String>,
+    /// Screenshot size in pixels.
+    #[arg(long, value_name = "WIDTHxHEIGHT", value_parser = parse_size, default_value = "1280x720")]
     size: (u32, u32),
 }
 
-fn parse_args() -> Result<Args, String> {
-    let mut args = Args {
-        screenshot: None,
-        frames: 120,
-        scene: SceneKind::Drape.name().to_string(),
-        options: SceneOptions::default(),
-        size: (1280, 720),
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once('x')
+        .ok_or("expected WIDTHxHEIGHT, for example 1280x720")?;
+    let side = |v: &str| match v.parse::<u32>() {
+        Ok(n) if (16..=8192).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "'{v}' must be a whole number of pixels from 16 to 8192"
+        )),
     };
-    let mut it = std::env::args().skip(1);
-    while let Some(flag) = it.next() {
-        let mut value = || it.next().ok_or(format!("{flag} needs a value"));
-        match flag.as_str() {
-            "--screenshot" => args.screenshot = Some(value()?),
-            "--frames" => {
-                args.frames = value()?
-                    .parse()
-                    .map_err(|_| "--frames takes a whole number".to_string())?
-            }
-            "--scene" => args.scene = value()?,
-            "--integrator" => {
-                args.options.integrator =
-                    Some(Integrator::from_name(&value()?).map_err(|e| e.to_string())?)
-            }
-            "--material" => {
-                args.options.material =
-                    Some(Material::by_name(&value()?).map_err(|e| e.to_string())?)
-            }
-            "--variant" => {
-                args.options.variant =
-                    Some(PinPreset::from_name(&value()?).map_err(|e| e.to_string())?)
-            }
-            "--n" => {
-                args.options.n = Some(
-                    value()?
-                        .parse()
-                        .map_err(|_| "--n takes a whole number".to_string())?,
-                )
-            }
-            "--size" => {
-                let v = value()?;
-                let (w, h) = v.split_once('x').ok_or("--size takes WIDTHxHEIGHT")?;
-                args.size = (
-                    w.parse().map_err(|_| "bad width")?,
-                    h.parse().map_err(|_| "bad height")?,
-                );
-            }
-            other => return Err(format!("unknown argument '{other}'")),
-        }
-    }
-    Ok(args)
+    Ok((side(w)?, side(h)?))
 }
 
 #[kiss3d::main]
 async fn main() {
-    let args = match parse_args() {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("error: {e}");
-            std::process::exit(2);
-        }
-    };
+    use clap::Parser as _;
+    let args = Args::parse();
+    let options = args.options.options();
     if let Some(path) = &args.screenshot {
-        let scene = match Scene::open(&args.scene, &args.options) {
+        let frames = options.frames.unwrap_or(120);
+        let scene = match Scene::open(&args.scene, &options) {
             Ok(s) => s,
             Err(e) => {
                 eprintln!("error: {e}");
                 std::process::exit(2);
             }
         };
-        match viewer::screenshot(scene, args.frames, std::path::Path::new(path), args.size).await {
+        match viewer::screenshot(scene, frames, std::path::Path::new(path), args.size).await {
             Ok(()) => println!("wrote {path}"),
             Err(e) => {
                 eprintln!("error: {e}");
@@ -106,7 +77,7 @@ async fn main() {
         }
         return;
     }
-    interactive(args).await;
+    interactive(args.scene, options).await;
 }
 
 /// Everything the window shows and the keys change.
@@ -135,7 +106,7 @@ impl Showcase {
         root: &mut SceneNode3d,
         source: &str,
         options: SceneOptions,
-    ) -> Result<(Scene, SceneView), ClothError> {
+    ) -> Result<(Scene, SceneView), SceneError> {
         let scene = Scene::open(source, &options)?;
         let view = SceneView::new(root, &scene);
         Ok((scene, view))
@@ -170,12 +141,12 @@ fn next_in<T: Copy + PartialEq>(all: &[T], current: T) -> T {
     all[(i + 1) % all.len()]
 }
 
-async fn interactive(args: Args) {
+async fn interactive(source: String, options: SceneOptions) {
     let mut window = Window::new_with_size("cloth3d showcase", 1280, 720).await;
     window.set_background_color(viewer::BACKGROUND);
     let mut root = SceneNode3d::empty();
     viewer::add_lights(&mut root);
-    let (scene, view) = match Showcase::load(&mut root, &args.scene, args.options.clone()) {
+    let (scene, view) = match Showcase::load(&mut root, &source, options.clone()) {
         Ok(x) => x,
         Err(e) => {
             eprintln!("error: {e}");
@@ -183,8 +154,8 @@ async fn interactive(args: Args) {
         }
     };
     let mut app = Showcase {
-        source: args.scene,
-        options: args.options,
+        source,
+        options,
         wind_on: !scene.cloth.params.wind.is_calm(),
         camera: viewer::camera_for(&scene),
         scene,
@@ -274,9 +245,10 @@ async fn interactive(args: Args) {
                             };
                         }
                         Key::I => {
-                            let next = next_in(&Integrator::ALL, app.scene.cloth.params.integrator);
-                            app.scene.cloth.set_integrator(next);
-                            app.scene.cloth.params.substeps = next.default_substeps();
+                            let next =
+                                next_in(&Integrator::ALL, app.scene.solver.settings.integrator);
+                            app.scene.solver.set_integrator(next);
+                            app.scene.solver.settings.substeps = next.default_substeps();
                             app.options.integrator = Some(next);
                         }
                         Key::M => {
@@ -376,7 +348,7 @@ fn overlay_text(window: &mut Window, font: &std::sync::Arc<Font>, app: &Showcase
             "{}{}  |  {}  |  {}  |  {} particles, {} springs",
             app.scene.name,
             app.scene.variant.map(|v| format!(" ({})", v.name())).unwrap_or_default(),
-            cloth.params.integrator,
+            app.scene.solver.integrator(),
             cloth.material.name,
             cloth.particle_count(),
             cloth.springs().len()
@@ -385,7 +357,7 @@ fn overlay_text(window: &mut Window, font: &std::sync::Arc<Font>, app: &Showcase
             "frame {:.1} ms  step {:.2} ms  substeps {}  |  energy {:.3} J (kinetic {:.3})  |  stretch {:.2}%{}",
             app.frame_ms,
             app.step_ms,
-            cloth.substeps_for(app.scene.dt),
+            app.scene.solver.substeps_for(cloth, app.scene.dt),
             e.total(),
             e.kinetic,
             100.0 * cloth.max_strain(SpringKind::Stretch),
@@ -419,6 +391,7 @@ fn overlay_text(window: &mut Window, font: &std::sync::Arc<Font>, app: &Showcase
 /// Live controls: every change applies at the next frame, no restart.
 fn controls(window: &mut Window, app: &mut Showcase) {
     let cloth = &mut app.scene.cloth;
+    let solver = &mut app.scene.solver;
     let mut dt = app.scene.dt;
     window.draw_ui(|ctx| {
         egui::Window::new("controls")
@@ -487,29 +460,29 @@ fn controls(window: &mut Window, app: &mut Showcase) {
                     }
                 }
                 ui.add(egui::Slider::new(&mut dt, 1.0 / 240.0..=1.0 / 20.0).text("dt (s)"));
-                let mut auto = cloth.params.substeps == Substeps::Auto;
-                let mut k = match cloth.params.substeps {
+                let mut auto = solver.settings.substeps == Substeps::Auto;
+                let mut k = match solver.settings.substeps {
                     Substeps::Fixed(k) => k,
-                    Substeps::Auto => cloth.substeps_for(dt),
+                    Substeps::Auto => solver.substeps_for(cloth, dt),
                 };
                 ui.checkbox(&mut auto, "automatic substeps");
                 if !auto {
                     ui.add(egui::Slider::new(&mut k, 1..=400).text("substeps"));
                 }
-                cloth.params.substeps = if auto {
+                solver.settings.substeps = if auto {
                     Substeps::Auto
                 } else {
                     Substeps::Fixed(k)
                 };
                 egui::ComboBox::from_label("integrator")
-                    .selected_text(cloth.params.integrator.name())
+                    .selected_text(solver.settings.integrator.name())
                     .show_ui(ui, |ui| {
                         for i in Integrator::ALL {
                             if ui
-                                .selectable_label(cloth.params.integrator == i, i.name())
+                                .selectable_label(solver.settings.integrator == i, i.name())
                                 .clicked()
                             {
-                                cloth.set_integrator(i);
+                                solver.set_integrator(i);
                             }
                         }
                     });

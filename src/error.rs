@@ -1,4 +1,5 @@
-//! The one error type of the library: every failure a user can cause.
+//! The error of building and stepping a cloth, and the checks that produce it.
+//! (Scene files have their own, `crate::scenes::SceneError`.)
 
 use thiserror::Error;
 
@@ -127,33 +128,6 @@ pub enum ClothError {
     /// The linear solver of an implicit integrator could not be built.
     #[error("linear solver failed: {0}")]
     Solver(String),
-    /// A scene file could not be read: where, which field, and why.
-    #[error(
-        "{}line {line}, column {column}{}: {message}",
-        path_prefix(path),
-        field_suffix(field)
-    )]
-    SceneFile {
-        /// The file (empty when the scene was read from text).
-        path: String,
-        /// Line of the error, counted from 1 (0 when it has no place in the text).
-        line: usize,
-        /// Column of the error, counted from 1.
-        column: usize,
-        /// Path of the field that is wrong, for example `cloth.material.stretch.stiffness`
-        /// (empty when the error is in the syntax itself).
-        field: String,
-        /// What is wrong.
-        message: String,
-    },
-    /// A file could not be read or written.
-    #[error("{path}: {message}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The system's message.
-        message: String,
-    },
 }
 
 /// For an explicit integrator, the advice to switch to an implicit one.
@@ -162,22 +136,6 @@ fn implicit_advice(integrator: &str) -> &'static str {
         ""
     } else {
         ", or an implicit integrator (implicit-euler, fast-mass-spring)"
-    }
-}
-
-fn path_prefix(path: &str) -> String {
-    if path.is_empty() {
-        String::new()
-    } else {
-        format!("{path}: ")
-    }
-}
-
-fn field_suffix(field: &str) -> String {
-    if field.is_empty() {
-        String::new()
-    } else {
-        format!(", field `{field}`")
     }
 }
 

@@ -3,7 +3,9 @@
 //! Every function here is pure: it reads positions and velocities and adds
 //! forces (N) or accelerations (m/s²) into a buffer.
 
-use crate::cloth::{Cloth, Material, SimulationParams, SpringKind, SpringParams, Springs, Wind};
+use crate::cloth::{
+    Cloth, Material, Particles, PhysicsParams, SpringKind, SpringParams, Springs, Topology, Wind,
+};
 use crate::math::Vector;
 
 /// Force on particle `a` from a spring joining it to `b`, in newtons:
@@ -85,7 +87,7 @@ pub(crate) fn add_spring_forces(
         let p = params[springs.kind(range.start).index()];
         #[cfg(feature = "parallel")]
         if disjoint && range.len() >= PARALLEL_MIN {
-            parallel_class(a, b, rest, range.clone(), p, x, v, f);
+            parallel_class(springs, range.clone(), p, x, v, f);
             continue;
         }
         let _ = disjoint;
@@ -106,17 +108,15 @@ unsafe impl Send for SharedForces {}
 unsafe impl Sync for SharedForces {}
 
 #[cfg(feature = "parallel")]
-#[allow(clippy::too_many_arguments)]
 fn parallel_class(
-    a: &[u32],
-    b: &[u32],
-    rest: &[f32],
+    springs: &Springs,
     range: std::ops::Range<usize>,
     p: SpringParams,
     x: &[Vector],
     v: &[Vector],
     f: &mut [Vector],
 ) {
+    let (a, b, rest) = (&springs.a[..], &springs.b[..], &springs.rest[..]);
     use rayon::prelude::*;
     let n = f.len();
     let out = SharedForces(f.as_mut_ptr());
@@ -163,27 +163,46 @@ pub(crate) struct ForceModel<'a> {
     pub parallel: bool,
 }
 
+/// The masses of a cloth's particles, borrowed apart from its positions
+/// and velocities so that integrators can write those meanwhile.
+#[derive(Clone, Copy)]
+pub(crate) struct Masses<'a> {
+    /// Masses, in kg.
+    pub mass: &'a [f32],
+    /// Inverse masses, in 1/kg; 0 for pinned particles.
+    pub inv_mass: &'a [f32],
+}
+
+impl<'a> Masses<'a> {
+    /// The masses of `particles`.
+    pub fn of(particles: &'a Particles) -> Self {
+        Masses {
+            mass: &particles.mass,
+            inv_mass: &particles.inv_mass,
+        }
+    }
+}
+
 impl<'a> ForceModel<'a> {
-    /// The force model of a cloth's parts: the masses are passed apart from
-    /// the cloth so integrators can borrow the positions mutably meanwhile.
+    /// The force model of a cloth's parts; `parallel` evaluates spring
+    /// forces on several threads (with the `parallel` feature).
     pub fn new(
-        springs: &'a Springs,
+        topology: &'a Topology,
         material: &Material,
-        triangles: &'a [[u32; 3]],
-        mass: &'a [f32],
-        inv_mass: &'a [f32],
-        params: &SimulationParams,
+        masses: Masses<'a>,
+        physics: &PhysicsParams,
+        parallel: bool,
     ) -> Self {
         ForceModel {
-            springs,
+            springs: &topology.springs,
             spring_params: SpringKind::ALL.map(|k| material.params(k)),
-            triangles,
-            mass,
-            inv_mass,
-            gravity: params.gravity,
-            air_drag: params.air_drag,
-            wind: params.wind,
-            parallel: params.parallel,
+            triangles: &topology.triangles,
+            mass: masses.mass,
+            inv_mass: masses.inv_mass,
+            gravity: physics.gravity,
+            air_drag: physics.air_drag,
+            wind: physics.wind,
+            parallel,
         }
     }
 
@@ -220,12 +239,11 @@ impl Cloth {
             return;
         }
         let model = ForceModel::new(
-            &self.springs,
+            &self.topology,
             &self.material,
-            &self.triangles,
-            &self.particles.mass,
-            &self.particles.inv_mass,
+            Masses::of(&self.particles),
             &self.params,
+            false,
         );
         model.forces(&self.particles.x, &self.particles.v, f);
     }

@@ -12,9 +12,11 @@
 //!     .horizontal(Vector::new(0.0, 0.6, 0.0))
 //!     .material(Material::cotton())
 //!     .build()?;
+//! // The solver steps the cloth (symplectic Euler by default).
+//! let mut solver = ClothSolver::default();
 //! let ball = Obstacle::ball(Vector::ZERO, 0.3);
 //! for _frame in 0..60 {
-//!     cloth.step(1.0 / 60.0, std::slice::from_ref(&ball))?;
+//!     solver.step(&mut cloth, 1.0 / 60.0, std::slice::from_ref(&ball))?;
 //! }
 //! assert!(cloth.is_finite());
 //! // It rests on the ball: nothing is inside it.
@@ -25,48 +27,46 @@
 // Numeric kernels index several structure-of-arrays buffers with one index.
 #![allow(clippy::needless_range_loop)]
 
-pub mod bench;
+#[cfg(feature = "cli")]
+pub mod cli;
 pub mod cloth;
 pub mod collision;
-pub mod compare;
+pub mod context;
 pub mod error;
 pub mod export;
 pub mod forces;
-pub mod integrators;
+pub mod math;
 pub mod metrics;
-pub mod pipeline;
-pub mod plot;
 pub mod rapier;
 pub mod scenes;
+pub mod simulation;
+pub mod solver;
 #[cfg(feature = "viewer")]
 pub mod viewer;
 
 pub use cloth::{
-    Cloth, ClothBuilder, Material, PinPreset, SimulationParams, SpringKind, SpringParams, Substeps,
+    Cloth, ClothBuilder, Material, PhysicsParams, PinPreset, SpringKind, SpringParams, Topology,
     Wind,
 };
 pub use collision::Obstacle;
 pub use error::ClothError;
-pub use integrators::{Integrator, Preconditioner};
-pub use pipeline::StepReport;
-pub use scenes::{Scene, SceneDesc, SceneKind};
-
-/// The math types of parry3d and rapier3d (glam-based, `f32`).
-pub mod math {
-    pub use parry3d::math::{Pose, Real, Rotation, Vector};
-}
+pub use scenes::{Scene, SceneDesc, SceneError, SceneKind};
+pub use simulation::Simulation;
+pub use solver::{ClothSolver, Integrator, Preconditioner, SolverSettings, StepReport, Substeps};
 
 /// Everything a typical user needs, in one import.
 pub mod prelude {
     pub use crate::cloth::{
-        Cloth, ClothBuilder, Energy, Material, PinPreset, SimulationParams, Spring, SpringKind,
-        SpringParams, Substeps, Wind,
+        Cloth, ClothBuilder, Energy, Material, PhysicsParams, PinPreset, Spring, SpringKind,
+        SpringParams, Wind,
     };
     pub use crate::collision::Obstacle;
     pub use crate::error::ClothError;
-    pub use crate::integrators::{Integrator, Preconditioner};
     pub use crate::math::{Pose, Rotation, Vector};
-    pub use crate::pipeline::StepReport;
+    pub use crate::simulation::Simulation;
+    pub use crate::solver::{
+        ClothSolver, Integrator, Preconditioner, SolverSettings, StepReport, Substeps,
+    };
 }
 
 /// The README's code, compiled and run as doctests so it stays true.

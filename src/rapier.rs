@@ -26,10 +26,11 @@
 //!     RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 1.0, 0.0)),
 //!     ColliderBuilder::ball(0.1).density(500.0),
 //! );
-//! let mut cloth = ClothBuilder::new(16, 16)
+//! let cloth = ClothBuilder::new(16, 16)
 //!     .horizontal(Vector::new(0.0, 0.5, 0.0))
 //!     .pins(PinPreset::FourCorners)
 //!     .build()?;
+//! let mut cloth = Simulation::new(cloth);
 //! let mut coupling = RapierCoupling::new();
 //! for _ in 0..60 {
 //!     coupling.step_world(&mut cloth, &mut world)?;
@@ -50,7 +51,39 @@ use crate::cloth::Cloth;
 use crate::collision::{DynamicBody, Obstacle};
 use crate::error::ClothError;
 use crate::math::{Pose, Vector};
-use crate::pipeline::StepReport;
+use crate::simulation::Simulation;
+use crate::solver::{ClothSolver, StepReport};
+
+/// The parts of a rapier world a cloth step reads (and the bodies it pushes),
+/// borrowed for one step, as rapier's own `step` takes its sets.
+pub struct RapierSets<'a> {
+    /// The frame step, in seconds (rapier's `integration_parameters.dt`).
+    pub dt: f32,
+    /// Gravity, in m/s², to predict where dynamic bodies go.
+    pub gravity: Vector,
+    /// The bodies; dynamic ones receive the cloth's impulses.
+    pub bodies: &'a mut RigidBodySet,
+    /// The colliders, every one a potential obstacle.
+    pub colliders: &'a ColliderSet,
+    /// The broad phase that finds the colliders near the cloth.
+    pub broad_phase: &'a BroadPhaseBvh,
+    /// The narrow phase (its query dispatcher).
+    pub narrow_phase: &'a NarrowPhase,
+}
+
+impl<'a> RapierSets<'a> {
+    /// The sets of a [`PhysicsWorld`], with its `dt` and gravity.
+    pub fn of(world: &'a mut PhysicsWorld) -> Self {
+        RapierSets {
+            dt: world.integration_parameters.dt,
+            gravity: world.gravity,
+            bodies: &mut world.bodies,
+            colliders: &world.colliders,
+            broad_phase: &world.broad_phase,
+            narrow_phase: &world.narrow_phase,
+        }
+    }
+}
 
 /// A particle held at a point fixed on a rigid body.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -171,62 +204,41 @@ impl RapierCoupling {
         self.obstacles.iter().zip(self.handles.iter().map(|h| h.0))
     }
 
-    /// Steps `cloth` by `dt` seconds against the colliders of a rapier world
-    /// given as its parts (and its gravity, m/s², to predict where dynamic
-    /// bodies go); call right before rapier's own step.
-    #[allow(clippy::too_many_arguments)]
+    /// Steps `cloth` with `solver` by the sets' `dt` against the colliders
+    /// of a rapier world given as its parts; call right before rapier's own step.
     pub fn step(
         &mut self,
         cloth: &mut Cloth,
-        dt: f32,
-        gravity: Vector,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        broad_phase: &BroadPhaseBvh,
-        narrow_phase: &NarrowPhase,
+        solver: &mut ClothSolver,
+        sets: RapierSets,
     ) -> Result<CouplingReport, ClothError> {
+        let (dt, gravity) = (sets.dt, sets.gravity);
         crate::error::positive("dt", dt)?;
         crate::error::finite_vec("gravity", gravity)?;
         crate::error::non_negative("friction", self.friction)?;
         crate::error::non_negative("max obstacle speed", self.max_obstacle_speed)?;
-        self.drive_attachments(cloth, dt, gravity, bodies)?;
-        self.gather(
-            cloth,
-            dt,
-            gravity,
-            bodies,
-            colliders,
-            broad_phase,
-            narrow_phase,
-        );
-        let step = cloth.step(dt, &self.obstacles)?;
+        self.drive_attachments(cloth, dt, gravity, sets.bodies)?;
+        self.gather(cloth, &sets);
+        let step = solver.step(cloth, dt, &self.obstacles)?;
         let mut report = CouplingReport {
             step,
             colliders: self.obstacles.len(),
             ..Default::default()
         };
         if self.two_way {
-            report.impulse_to_bodies = self.push_bodies(cloth, dt, bodies);
+            report.impulse_to_bodies = self.push_bodies(cloth, solver, dt, sets.bodies);
         }
         Ok(report)
     }
 
-    /// [`RapierCoupling::step`] with the sets of a [`PhysicsWorld`] and its `dt`.
+    /// [`RapierCoupling::step`] for a [`Simulation`], with the sets of a
+    /// [`PhysicsWorld`] and its `dt`.
     pub fn step_world(
         &mut self,
-        cloth: &mut Cloth,
+        sim: &mut Simulation,
         world: &mut PhysicsWorld,
     ) -> Result<CouplingReport, ClothError> {
-        let dt = world.integration_parameters.dt;
-        self.step(
-            cloth,
-            dt,
-            world.gravity,
-            &mut world.bodies,
-            &world.colliders,
-            &world.broad_phase,
-            &world.narrow_phase,
-        )
+        self.step(&mut sim.cloth, &mut sim.solver, RapierSets::of(world))
     }
 
     /// Pins every attached particle and gives it the velocity that takes it
@@ -261,17 +273,8 @@ impl RapierCoupling {
 
     /// Builds the obstacles from the colliders near the cloth, found through
     /// rapier's broad phase.
-    #[allow(clippy::too_many_arguments)]
-    fn gather(
-        &mut self,
-        cloth: &Cloth,
-        dt: f32,
-        gravity: Vector,
-        bodies: &RigidBodySet,
-        colliders: &ColliderSet,
-        broad_phase: &BroadPhaseBvh,
-        narrow_phase: &NarrowPhase,
-    ) {
+    fn gather(&mut self, cloth: &Cloth, sets: &RapierSets) {
+        let (dt, gravity, bodies) = (sets.dt, sets.gravity, &*sets.bodies);
         self.obstacles.clear();
         self.handles.clear();
         let Some(region) = cloth_region(cloth, dt) else {
@@ -281,10 +284,10 @@ impl RapierCoupling {
         if !self.include_sensors {
             filter = filter.exclude_sensors();
         }
-        let query = broad_phase.as_query_pipeline(
-            narrow_phase.query_dispatcher(),
+        let query = sets.broad_phase.as_query_pipeline(
+            sets.narrow_phase.query_dispatcher(),
             bodies,
-            colliders,
+            sets.colliders,
             filter,
         );
         // Candidates from the broad phase, within reach of a collider moving
@@ -345,9 +348,15 @@ impl RapierCoupling {
 
     /// Hands the cloth's contact impulses, and the pull of attached particles,
     /// to the dynamic bodies.
-    fn push_bodies(&self, cloth: &Cloth, dt: f32, bodies: &mut RigidBodySet) -> Vector {
+    fn push_bodies(
+        &self,
+        cloth: &Cloth,
+        solver: &ClothSolver,
+        dt: f32,
+        bodies: &mut RigidBodySet,
+    ) -> Vector {
         let mut total = Vector::ZERO;
-        for (impulse, &(_, parent)) in cloth.obstacle_impulses().iter().zip(&self.handles) {
+        for (impulse, &(_, parent)) in solver.obstacle_impulses().iter().zip(&self.handles) {
             if impulse.contacts == 0 && impulse.linear == Vector::ZERO {
                 continue;
             }

@@ -40,19 +40,20 @@ fn a_warmed_up_step_allocates_nothing() {
         for kind in [SceneKind::Drape, SceneKind::Flag] {
             let mut scene = scene_with(kind, 12, integrator);
             // Parallel evaluation would allocate in rayon's machinery.
-            scene.cloth.params.parallel = false;
+            scene.solver.settings.parallel = false;
             // Warm up until the drape reaches its ball: the measured steps
             // then have contacts, friction and, for fast mass-spring,
             // refactorisations of the global matrix.
             for _ in 0..18 {
-                scene.cloth.step(scene.dt, &scene.obstacles).unwrap();
+                (scene.solver)
+                    .step(&mut scene.cloth, scene.dt, &scene.obstacles)
+                    .unwrap();
             }
             let before = ALLOCATIONS.load(Ordering::Relaxed);
             let mut contacts = 0;
             for _ in 0..5 {
-                contacts += scene
-                    .cloth
-                    .step(scene.dt, &scene.obstacles)
+                contacts += (scene.solver)
+                    .step(&mut scene.cloth, scene.dt, &scene.obstacles)
                     .unwrap()
                     .contacts;
             }

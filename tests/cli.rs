@@ -151,7 +151,7 @@ fn compare_runs_every_integrator_and_writes_a_plot() {
     assert_eq!((img.width(), img.height()), (900, 700));
     // One line per integrator, in its colour, in both panels (energy on top,
     // stretch below).
-    for color in cloth3d::compare::COLORS {
+    for color in cloth3d::cli::compare::COLORS {
         for half in [0..350, 350..700] {
             let count = img
                 .enumerate_pixels()

@@ -3,8 +3,9 @@
 //! capsules, triangle meshes, moving obstacles and many obstacles.
 
 use cloth3d::collision::{contact, penetration_depth};
-use cloth3d::metrics::{max_penetration, run};
+use cloth3d::metrics::max_penetration;
 use cloth3d::prelude::*;
+use cloth3d::scenes::run;
 use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
 use glam::{DQuat, DVec3};
 use parry3d::query::PointQuery;
@@ -190,13 +191,14 @@ fn box_contact_matches_the_analytic_projection() {
 }
 
 /// One particle cloth-from-parts, for resolution tests.
-fn particle_at(p: Vector, v: Vector) -> Cloth {
-    let mut cloth =
-        Cloth::from_parts(vec![p], vec![0.01], vec![], vec![], Material::cotton()).unwrap();
+fn particle_at(p: Vector, v: Vector) -> Simulation {
+    let mut cloth = Simulation::new(
+        Cloth::from_parts(vec![p], vec![0.01], vec![], vec![], Material::cotton()).unwrap(),
+    );
     cloth.set_velocity(0, v).unwrap();
     cloth.params.gravity = Vector::ZERO;
     cloth.params.air_drag = 0.0;
-    cloth.params.substeps = Substeps::Fixed(1);
+    cloth.solver.settings.substeps = Substeps::Fixed(1);
     cloth
 }
 
@@ -267,11 +269,13 @@ fn a_moving_obstacle_drags_the_cloth_by_friction() {
     )
     .with_velocity(Vector::new(0.5, 0.0, 0.0), Vector::ZERO)
     .with_friction(1.0);
-    let mut cloth = ClothBuilder::new(8, 8)
-        .size(0.4, 0.4)
-        .horizontal(Vector::new(0.0, 0.012, 0.0))
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(8, 8)
+            .size(0.4, 0.4)
+            .horizontal(Vector::new(0.0, 0.012, 0.0))
+            .build()
+            .unwrap(),
+    );
     for _ in 0..60 {
         // The belt surface moves, its pose stays: a conveyor.
         cloth.step(1.0 / 60.0, std::slice::from_ref(&belt)).unwrap();
@@ -361,7 +365,7 @@ fn box_springs_do_not_cut_through_the_cube_edges() {
         },
     )
     .unwrap();
-    scene.cloth.params.edge_collisions = false;
+    scene.solver.settings.edge_collisions = false;
     let mut worst = 0.0f32;
     for _ in 0..180 {
         scene.step_frame().unwrap();
@@ -390,11 +394,13 @@ fn capsules_and_triangle_meshes_work_through_the_same_path() {
         Obstacle::new(SharedShape::trimesh(v, idx).unwrap(), Pose::IDENTITY)
     };
     for obstacle in [capsule, ridge] {
-        let mut cloth = ClothBuilder::new(24, 24)
-            .size(0.8, 0.8)
-            .horizontal(Vector::new(0.0, 0.4, 0.0))
-            .build()
-            .unwrap();
+        let mut cloth = Simulation::new(
+            ClothBuilder::new(24, 24)
+                .size(0.8, 0.8)
+                .horizontal(Vector::new(0.0, 0.4, 0.0))
+                .build()
+                .unwrap(),
+        );
         let mut lowest_middle = f32::MAX;
         for _ in 0..90 {
             cloth
@@ -432,10 +438,12 @@ fn many_small_balls_hold_the_cloth_through_the_bounding_volume_tree() {
             balls.push(Obstacle::ball(Vector::new(x, 0.0, z), 0.03));
         }
     }
-    let mut cloth = ClothBuilder::new(64, 64)
-        .horizontal(Vector::new(0.0, 0.1, 0.0))
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(64, 64)
+            .horizontal(Vector::new(0.0, 0.1, 0.0))
+            .build()
+            .unwrap(),
+    );
     for _ in 0..60 {
         cloth.step(1.0 / 60.0, &balls).unwrap();
     }
@@ -452,13 +460,15 @@ fn many_small_balls_hold_the_cloth_through_the_bounding_volume_tree() {
 fn the_edge_pass_never_leaves_a_particle_inside() {
     let mut m = Material::silk();
     m.stretch.stiffness *= 3.5064273;
-    let mut cloth = ClothBuilder::new(3, 2)
-        .size(0.8, 0.6)
-        .material(m)
-        .pins(PinPreset::FlagColumn)
-        .integrator(Integrator::Verlet)
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(3, 2)
+            .size(0.8, 0.6)
+            .material(m)
+            .pins(PinPreset::FlagColumn)
+            .build()
+            .unwrap(),
+    )
+    .with_integrator(Integrator::Verlet);
     let pose = Pose::from_parts(
         Vector::new(0.0, 0.0, 0.23261665),
         Rotation::from_xyzw(0.0, 0.9224687, 0.33418396, 0.19331966),

@@ -149,9 +149,9 @@ fn run_plot_draws_three_curves() {
     assert_eq!((img.width(), img.height()), (900, 900));
     // Energy, stretch and penetration each in their panel, in their colour.
     let colors = [
-        cloth3d::plot::COLORS[1],
-        cloth3d::plot::COLORS[0],
-        cloth3d::plot::COLORS[2],
+        cloth3d::cli::plot::COLORS[1],
+        cloth3d::cli::plot::COLORS[0],
+        cloth3d::cli::plot::COLORS[2],
     ];
     for (panel, color) in colors.iter().enumerate() {
         let rows = panel as u32 * 300..(panel as u32 + 1) * 300;

@@ -4,8 +4,8 @@ use cloth3d::forces::{spring_force, wind_force_on_triangle};
 use cloth3d::prelude::*;
 
 /// A cloth with scrambled positions and velocities, no external force.
-fn scrambled_cloth() -> Cloth {
-    let mut cloth = ClothBuilder::new(9, 7).size(0.8, 0.6).build().unwrap();
+fn scrambled_cloth() -> Simulation {
+    let mut cloth = Simulation::new(ClothBuilder::new(9, 7).size(0.8, 0.6).build().unwrap());
     cloth.params.gravity = Vector::ZERO;
     cloth.params.air_drag = 0.0;
     cloth.material.stretch.damping = 0.3;
@@ -44,7 +44,7 @@ fn internal_spring_forces_sum_to_zero() {
 #[test]
 fn momentum_is_conserved_without_external_forces() {
     let mut cloth = scrambled_cloth();
-    cloth.params.substeps = Substeps::Auto;
+    cloth.solver.settings.substeps = Substeps::Auto;
     let p0 = cloth.momentum();
     for integrator in Integrator::ALL {
         cloth.set_integrator(integrator);
@@ -117,10 +117,12 @@ fn wind_pushes_along_the_normal_in_proportion_to_n_dot_d() {
 
 #[test]
 fn wind_moves_a_free_cloth_along_the_normal_component() {
-    let mut cloth = ClothBuilder::new(6, 6)
-        .vertical(Vector::ZERO)
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(6, 6)
+            .vertical(Vector::ZERO)
+            .build()
+            .unwrap(),
+    );
     cloth.params.gravity = Vector::ZERO;
     cloth.params.wind = Wind::new(Vector::new(1.0, 0.0, 1.0), 4.0);
     for _ in 0..10 {

@@ -8,8 +8,8 @@
 //! regenerates the file (`CLOTH3D_BLESS=1 cargo test --release --test golden`)
 //! and says why in its message.
 
-use cloth3d::integrators::Integrator;
 use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
+use cloth3d::solver::Integrator;
 
 const FRAMES: u32 = 60;
 const GOLDEN: &str = "tests/golden/behaviour.txt";
@@ -60,7 +60,11 @@ fn run(kind: SceneKind, variant: Option<cloth3d::PinPreset>, integrator: Integra
             let t = b.translation().to_array();
             let r = b.rotation().to_array();
             let v = b.linvel().to_array();
-            t.into_iter().chain(r).chain(v).map(f32::to_bits).collect::<Vec<_>>()
+            t.into_iter()
+                .chain(r)
+                .chain(v)
+                .map(f32::to_bits)
+                .collect::<Vec<_>>()
         })),
     };
     let c = cloth.centroid();
@@ -102,7 +106,11 @@ fn every_scene_with_every_integrator_computes_what_it_did() {
         .filter(|(w, g)| w != g)
         .map(|(w, g)| format!("want {w}\n got {g}"))
         .collect();
-    assert_eq!(want.lines().count(), got.lines().count(), "run count changed");
+    assert_eq!(
+        want.lines().count(),
+        got.lines().count(),
+        "run count changed"
+    );
     assert!(
         mismatched.is_empty(),
         "{} of {} runs changed:\n{}",

@@ -2,8 +2,8 @@
 
 mod common;
 
-use cloth3d::metrics::run;
 use cloth3d::prelude::*;
+use cloth3d::scenes::run;
 use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
 use common::{max_distance, oscillator};
 
@@ -24,14 +24,14 @@ fn implicit_euler_never_adds_energy_to_an_undamped_system() {
     }
     // A free, undamped cloth thrown and spinning, at game steps.
     for h in [1.0f32 / 60.0, 0.1] {
-        let mut cloth = ClothBuilder::new(8, 8).build().unwrap();
+        let mut cloth = Simulation::new(ClothBuilder::new(8, 8).build().unwrap());
         cloth.params.gravity = Vector::ZERO;
         cloth.params.air_drag = 0.0;
         for kind in SpringKind::ALL {
             cloth.material.params_mut(kind).damping = 0.0;
         }
         cloth.set_integrator(Integrator::ImplicitEuler);
-        cloth.params.substeps = Substeps::Fixed(1);
+        cloth.solver.settings.substeps = Substeps::Fixed(1);
         for i in 0..cloth.particle_count() {
             let p = cloth.positions()[i];
             cloth
@@ -52,17 +52,19 @@ fn implicit_euler_never_adds_energy_to_an_undamped_system() {
 
 /// A 10×10 cloth hanging from its top row, brought to rest by each integrator.
 fn hanging_equilibrium(integrator: Integrator, substeps: Substeps, frames: usize) -> Vec<Vector> {
-    let mut cloth = ClothBuilder::new(10, 10)
-        .size(0.5, 0.5)
-        .vertical(Vector::new(0.0, 1.0, 0.0))
-        .pins(PinPreset::CurtainRow)
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(10, 10)
+            .size(0.5, 0.5)
+            .vertical(Vector::new(0.0, 1.0, 0.0))
+            .pins(PinPreset::CurtainRow)
+            .build()
+            .unwrap(),
+    );
     cloth.params.air_drag = 3.0;
-    cloth.params.cg_tolerance = 1e-6;
-    cloth.params.cg_max_iterations = 500;
-    cloth.params.fms_iterations = 30;
-    cloth.params.substeps = substeps;
+    cloth.solver.settings.cg_tolerance = 1e-6;
+    cloth.solver.settings.cg_max_iterations = 500;
+    cloth.solver.settings.fms_iterations = 30;
+    cloth.solver.settings.substeps = substeps;
     cloth.set_integrator(integrator);
     for _ in 0..frames {
         cloth.step(1.0 / 60.0, &[]).unwrap();
@@ -86,38 +88,40 @@ fn implicit_solvers_reach_the_same_equilibrium_as_small_step_symplectic_euler() 
 
 #[test]
 fn the_cholesky_factor_is_reused_until_something_it_depends_on_changes() {
-    let mut cloth = ClothBuilder::new(12, 12)
-        .pins(PinPreset::TwoCorners)
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(12, 12)
+            .pins(PinPreset::TwoCorners)
+            .build()
+            .unwrap(),
+    );
     cloth.set_integrator(Integrator::FastMassSpring);
-    cloth.params.substeps = Substeps::Fixed(1);
-    assert_eq!(cloth.factorizations(), 0);
+    cloth.solver.settings.substeps = Substeps::Fixed(1);
+    assert_eq!(cloth.counters().factorizations, 0);
     for _ in 0..10 {
         cloth.step(1.0 / 60.0, &[]).unwrap();
     }
     assert_eq!(
-        cloth.factorizations(),
+        cloth.counters().factorizations,
         1,
         "one factor for ten identical steps"
     );
     // Wind, gravity and drag are not in the matrix.
     cloth.params.wind = Wind::new(Vector::X, 3.0);
     cloth.step(1.0 / 60.0, &[]).unwrap();
-    assert_eq!(cloth.factorizations(), 1);
+    assert_eq!(cloth.counters().factorizations, 1);
     // A new pin, a new step, a new stiffness or damping each need a new factor.
     cloth.pin(60).unwrap();
     cloth.step(1.0 / 60.0, &[]).unwrap();
-    assert_eq!(cloth.factorizations(), 2);
+    assert_eq!(cloth.counters().factorizations, 2);
     cloth.step(1.0 / 30.0, &[]).unwrap();
-    assert_eq!(cloth.factorizations(), 3);
+    assert_eq!(cloth.counters().factorizations, 3);
     cloth.material.stretch.stiffness *= 2.0;
     cloth.step(1.0 / 30.0, &[]).unwrap();
-    assert_eq!(cloth.factorizations(), 4);
+    assert_eq!(cloth.counters().factorizations, 4);
     cloth.material.shear.damping += 0.1;
     cloth.step(1.0 / 30.0, &[]).unwrap();
     cloth.step(1.0 / 30.0, &[]).unwrap();
-    assert_eq!(cloth.factorizations(), 5);
+    assert_eq!(cloth.counters().factorizations, 5);
 }
 
 #[test]
@@ -128,14 +132,16 @@ fn stiff_heavy_strongly_damped_cloth_is_stable_at_a_frame_step() {
         for kind in SpringKind::ALL {
             m.params_mut(kind).damping *= 100.0;
         }
-        let mut cloth = ClothBuilder::new(24, 24)
-            .total_mass(10.0)
-            .material(m)
-            .pins(PinPreset::TwoCorners)
-            .integrator(integrator)
-            .build()
-            .unwrap();
-        cloth.params.substeps = Substeps::Fixed(1);
+        let mut cloth = Simulation::new(
+            ClothBuilder::new(24, 24)
+                .total_mass(10.0)
+                .material(m)
+                .pins(PinPreset::TwoCorners)
+                .build()
+                .unwrap(),
+        )
+        .with_integrator(integrator);
+        cloth.solver.settings.substeps = Substeps::Fixed(1);
         for _ in 0..120 {
             cloth.step(1.0 / 60.0, &[]).unwrap();
         }
@@ -158,7 +164,7 @@ fn stiff_heavy_strongly_damped_cloth_is_stable_at_a_frame_step() {
 
 /// The `drape` scene (64 × 64, a 1/60 s frame, one step a frame) with the
 /// stretch springs made `k` N/m with damping `c` N·s/m.
-fn stiff_drape(integrator: Integrator, k: f32, c: f32) -> cloth3d::metrics::RunMetrics {
+fn stiff_drape(integrator: Integrator, k: f32, c: f32) -> cloth3d::scenes::RunMetrics {
     let mut material = Material::cotton();
     material.stretch = SpringParams::new(k, c);
     let mut scene = Scene::build(
@@ -174,8 +180,8 @@ fn stiff_drape(integrator: Integrator, k: f32, c: f32) -> cloth3d::metrics::RunM
     let m = run(&mut scene, 120).unwrap();
     // Contacts changing only refactor the numbers: one ordering for the run.
     if integrator == Integrator::FastMassSpring {
-        assert_eq!(scene.cloth.factorizations(), 1);
-        assert!(scene.cloth.refactorizations() > 0);
+        assert_eq!(scene.solver.counters().factorizations, 1);
+        assert!(scene.solver.counters().refactorizations > 0);
     }
     m
 }
@@ -204,19 +210,21 @@ fn both_large_step_solvers_drape_stiff_cloth_at_one_step_a_frame() {
 fn stiff_curtain_step(k: f32, preconditioner: Preconditioner) -> (u32, Vec<Vector>) {
     let mut material = Material::cotton();
     material.stretch.stiffness = k;
-    let mut cloth = ClothBuilder::new(32, 32)
-        .size(0.5, 0.5)
-        .vertical(Vector::new(0.0, 1.0, 0.0))
-        .pins(PinPreset::CurtainRow)
-        .material(material)
-        .integrator(Integrator::ImplicitEuler)
-        .build()
-        .unwrap();
-    cloth.params.substeps = Substeps::Fixed(1);
-    cloth.params.newton_iterations = 1;
-    cloth.params.cg_tolerance = 1e-6;
-    cloth.params.cg_max_iterations = 20_000;
-    cloth.params.preconditioner = preconditioner;
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(32, 32)
+            .size(0.5, 0.5)
+            .vertical(Vector::new(0.0, 1.0, 0.0))
+            .pins(PinPreset::CurtainRow)
+            .material(material)
+            .build()
+            .unwrap(),
+    )
+    .with_integrator(Integrator::ImplicitEuler);
+    cloth.solver.settings.substeps = Substeps::Fixed(1);
+    cloth.solver.settings.newton_iterations = 1;
+    cloth.solver.settings.cg_tolerance = 1e-6;
+    cloth.solver.settings.cg_max_iterations = 20_000;
+    cloth.solver.settings.preconditioner = preconditioner;
     // Stretched 5% down from its pinned top row and swung out of its plane:
     // the stiff springs recoil across the whole sheet and turn.
     for i in 0..cloth.particle_count() {

@@ -8,7 +8,7 @@ use common::{displacement, oscillator};
 
 /// Times (s) at which the displacement crosses zero going upwards, found by
 /// linear interpolation between steps.
-fn upward_crossings(cloth: &mut Cloth, h: f32, steps: usize) -> Vec<f64> {
+fn upward_crossings(cloth: &mut Simulation, h: f32, steps: usize) -> Vec<f64> {
     let mut crossings = Vec::new();
     let mut prev = displacement(cloth);
     for s in 0..steps {

@@ -30,7 +30,7 @@ fn parallel_and_serial_steps_are_bit_identical() {
                 },
             )
             .unwrap();
-            scene.cloth.params.parallel = parallel;
+            scene.solver.settings.parallel = parallel;
             for _ in 0..3 {
                 scene.step_frame().unwrap();
             }

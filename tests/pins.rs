@@ -33,10 +33,12 @@ fn presets_pin_the_figures_of_the_scenes() {
 
 #[test]
 fn pinned_particles_never_move_and_unpinned_ones_fall() {
-    let mut cloth = ClothBuilder::new(10, 10)
-        .pins(PinPreset::TwoCorners)
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(10, 10)
+            .pins(PinPreset::TwoCorners)
+            .build()
+            .unwrap(),
+    );
     let pinned = cloth.pinned();
     assert_eq!(pinned, vec![0, 9]);
     let before: Vec<Vector> = pinned.iter().map(|&i| cloth.positions()[i]).collect();
@@ -70,7 +72,7 @@ fn pinned_particles_never_move_and_unpinned_ones_fall() {
 
 #[test]
 fn out_of_range_pins_are_errors() {
-    let mut cloth = ClothBuilder::new(4, 3).build().unwrap();
+    let mut cloth = Simulation::new(ClothBuilder::new(4, 3).build().unwrap());
     assert!(matches!(
         cloth.pin(12),
         Err(ClothError::ParticleOutOfRange {
@@ -95,11 +97,13 @@ fn out_of_range_pins_are_errors() {
 
 #[test]
 fn cloth_pinned_along_its_top_row_comes_to_rest_with_bounded_stretch() {
-    let mut cloth = ClothBuilder::new(16, 16)
-        .vertical(Vector::new(0.0, 1.0, 0.0))
-        .pins(PinPreset::CurtainRow)
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(16, 16)
+            .vertical(Vector::new(0.0, 1.0, 0.0))
+            .pins(PinPreset::CurtainRow)
+            .build()
+            .unwrap(),
+    );
     cloth.params.air_drag = 2.0;
     let top: Vec<Vector> = (0..16).map(|c| cloth.positions()[c]).collect();
     // Give it a push so it has something to come to rest from.

@@ -1,9 +1,9 @@
 //! Co-simulation with a real rapier3d world: colliders as obstacles, moving
 //! and fast obstacles, two-way coupling, attachments.
 
-use cloth3d::metrics::run;
 use cloth3d::prelude::*;
-use cloth3d::rapier::RapierCoupling;
+use cloth3d::rapier::{RapierCoupling, RapierSets};
+use cloth3d::scenes::run;
 use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
 use rapier3d::prelude::*;
 
@@ -50,11 +50,13 @@ fn every_kind_of_collider_holds_the_cloth() {
     for (name, collider) in colliders {
         let mut world = PhysicsWorld::new();
         world.insert(RigidBodyBuilder::fixed(), collider);
-        let mut cloth = ClothBuilder::new(20, 20)
-            .size(0.8, 0.8)
-            .horizontal(Vector::new(0.0, 0.5, 0.0))
-            .build()
-            .unwrap();
+        let mut cloth = Simulation::new(
+            ClothBuilder::new(20, 20)
+                .size(0.8, 0.8)
+                .horizontal(Vector::new(0.0, 0.5, 0.0))
+                .build()
+                .unwrap(),
+        );
         let mut coupling = RapierCoupling::new();
         for _ in 0..90 {
             let report = coupling.step_world(&mut cloth, &mut world).unwrap();
@@ -82,10 +84,12 @@ fn collision_groups_decide_what_the_cloth_sees_and_removed_colliders_are_fine() 
             InteractionTestMode::And,
         )),
     );
-    let mut cloth = ClothBuilder::new(10, 10)
-        .horizontal(Vector::new(0.0, 0.3, 0.0))
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(10, 10)
+            .horizontal(Vector::new(0.0, 0.3, 0.0))
+            .build()
+            .unwrap(),
+    );
     let mut coupling = RapierCoupling::new();
     coupling.groups =
         InteractionGroups::new(Group::GROUP_1, Group::GROUP_1, InteractionTestMode::And);
@@ -98,10 +102,12 @@ fn collision_groups_decide_what_the_cloth_sees_and_removed_colliders_are_fine() 
         "the cloth fell through a collider it must not see"
     );
     // Seen again once the groups match; then removed between steps: no panic, it falls.
-    let mut cloth = ClothBuilder::new(10, 10)
-        .horizontal(Vector::new(0.0, 0.3, 0.0))
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(10, 10)
+            .horizontal(Vector::new(0.0, 0.3, 0.0))
+            .build()
+            .unwrap(),
+    );
     coupling.groups = InteractionGroups::all();
     for _ in 0..30 {
         coupling.step_world(&mut cloth, &mut world).unwrap();
@@ -124,11 +130,13 @@ fn a_moving_body_drags_the_cloth_by_friction() {
         RigidBodyBuilder::kinematic_velocity_based().linvel(Vector::new(0.5, 0.0, 0.0)),
         ColliderBuilder::cuboid(3.0, 0.1, 3.0),
     );
-    let mut cloth = ClothBuilder::new(8, 8)
-        .size(0.4, 0.4)
-        .horizontal(Vector::new(0.0, 0.115, 0.0))
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(8, 8)
+            .size(0.4, 0.4)
+            .horizontal(Vector::new(0.0, 0.115, 0.0))
+            .build()
+            .unwrap(),
+    );
     let mut coupling = RapierCoupling::new();
     coupling.friction = 1.0;
     for _ in 0..60 {
@@ -162,15 +170,17 @@ fn momentum_exchange(integrator: Integrator) {
         RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.0, 0.0)),
         ColliderBuilder::ball(0.2).density(100.0),
     );
-    let mut cloth = ClothBuilder::new(12, 12)
-        .size(0.6, 0.6)
-        .horizontal(Vector::new(0.0, 0.4, 0.0))
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(12, 12)
+            .size(0.6, 0.6)
+            .horizontal(Vector::new(0.0, 0.4, 0.0))
+            .build()
+            .unwrap(),
+    );
     cloth.params.gravity = Vector::ZERO;
     cloth.params.air_drag = 0.0;
     cloth.set_integrator(integrator);
-    cloth.params.substeps = integrator.default_substeps();
+    cloth.solver.settings.substeps = integrator.default_substeps();
     for i in 0..cloth.particle_count() {
         cloth.set_velocity(i, Vector::new(0.0, -2.0, 0.0)).unwrap();
     }
@@ -208,11 +218,13 @@ fn one_way_coupling_pushes_nothing() {
         RigidBodyBuilder::dynamic(),
         ColliderBuilder::ball(0.2).density(100.0),
     );
-    let mut cloth2 = ClothBuilder::new(12, 12)
-        .size(0.6, 0.6)
-        .horizontal(Vector::new(0.0, 0.4, 0.0))
-        .build()
-        .unwrap();
+    let mut cloth2 = Simulation::new(
+        ClothBuilder::new(12, 12)
+            .size(0.6, 0.6)
+            .horizontal(Vector::new(0.0, 0.4, 0.0))
+            .build()
+            .unwrap(),
+    );
     cloth2.params.gravity = Vector::ZERO;
     for i in 0..cloth2.particle_count() {
         cloth2.set_velocity(i, Vector::new(0.0, -2.0, 0.0)).unwrap();
@@ -292,7 +304,11 @@ fn curtain_is_never_inside_the_ball_even_at_ten_metres_per_second() {
         let z = (-1.0 + 10.0 * t).min(1.0);
         side.world.bodies[side.bodies[0]].set_next_kinematic_translation(Vector::new(0.0, 0.9, z));
         side.coupling
-            .step_world(&mut scene.cloth, &mut side.world)
+            .step(
+                &mut scene.cloth,
+                &mut scene.solver,
+                RapierSets::of(&mut side.world),
+            )
             .unwrap();
         side.world.step();
         scene.frame += 1;
@@ -320,10 +336,12 @@ fn attached_particles_follow_their_body_and_pull_it() {
             .angvel(Vector::new(0.0, 1.5, 0.0)),
         ColliderBuilder::ball(0.05).sensor(true),
     );
-    let mut cloth = ClothBuilder::new(10, 10)
-        .horizontal(Vector::new(0.0, 1.0, 0.0))
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(10, 10)
+            .horizontal(Vector::new(0.0, 1.0, 0.0))
+            .build()
+            .unwrap(),
+    );
     let mut coupling = RapierCoupling::new();
     coupling.attach(0, paddle, Vector::ZERO).unwrap();
     coupling
@@ -347,11 +365,13 @@ fn attached_particles_follow_their_body_and_pull_it() {
             .translation(Vector::new(0.0, 1.0, 0.0)),
         ColliderBuilder::ball(0.05).density(1000.0).sensor(true),
     );
-    let mut cloth = ClothBuilder::new(8, 8)
-        .size(0.5, 0.5)
-        .vertical(Vector::new(0.0, 0.75, 0.0))
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(8, 8)
+            .size(0.5, 0.5)
+            .vertical(Vector::new(0.0, 0.75, 0.0))
+            .build()
+            .unwrap(),
+    );
     let mut coupling = RapierCoupling::new();
     let top = 4;
     coupling

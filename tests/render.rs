@@ -80,8 +80,7 @@ fn every_scene_renders_off_screen_and_shows_cloth() {
         "{}/examples/scenes/capsule_drape.ron",
         env!("CARGO_MANIFEST_DIR")
     );
-    let mut scene =
-        cloth3d::scenes::file::load_scene(path.as_ref(), &SceneOptions::default()).unwrap();
+    let mut scene = Scene::open(&path, &SceneOptions::default()).unwrap();
     for _ in 0..45 {
         scene.step_frame().unwrap();
     }

@@ -9,30 +9,59 @@ use common::{bits, scene_with};
 use parry3d::shape::SharedShape;
 use proptest::prelude::*;
 
+/// Steps `scene` for `before` frames, snapshots its cloth and solver as
+/// JSON, restores them, and checks that both go on identically for `after` frames.
+fn snapshot_resumes(mut scene: Scene, before: u32, after: u32, what: &str) {
+    for _ in 0..before {
+        scene.step_frame().unwrap();
+    }
+    let snapshot = serde_json::to_string(&(&scene.cloth, &scene.solver)).unwrap();
+    let (cloth, solver): (Cloth, ClothSolver) = serde_json::from_str(&snapshot).unwrap();
+    assert_eq!(
+        cloth, scene.cloth,
+        "{what}: the snapshot lost some of the cloth"
+    );
+    assert_eq!(
+        solver, scene.solver,
+        "{what}: the snapshot lost some of the solver"
+    );
+    // Run both on: the uninterrupted one and the one resumed from the snapshot.
+    let mut resumed = Simulation { cloth, solver };
+    for frame in 0..after {
+        scene.step_frame().unwrap();
+        resumed.step(scene.dt, &scene.obstacles).unwrap();
+        assert_eq!(
+            bits(&scene.cloth),
+            bits(&resumed),
+            "{what}: frame {frame} differs after resuming"
+        );
+    }
+}
+
 #[test]
 fn a_snapshot_restores_exactly_and_resumes_bit_for_bit() {
-    for integrator in Integrator::ALL {
-        let mut scene = scene_with(SceneKind::Drape, 16, integrator);
-        for _ in 0..20 {
-            scene.step_frame().unwrap();
+    for parallel in [false, true] {
+        for integrator in Integrator::ALL {
+            let mut scene = scene_with(SceneKind::Drape, 16, integrator);
+            scene.solver.settings.parallel = parallel;
+            snapshot_resumes(scene, 20, 20, &format!("{integrator}, parallel {parallel}"));
         }
-        let snapshot = serde_json::to_string(&scene.cloth).unwrap();
-        let restored: Cloth = serde_json::from_str(&snapshot).unwrap();
-        assert_eq!(
-            restored, scene.cloth,
-            "{integrator}: the snapshot lost something"
-        );
-        // Run both on: the uninterrupted one and the one resumed from the snapshot.
-        let mut resumed = restored;
-        for frame in 0..20 {
-            scene.step_frame().unwrap();
-            resumed.step(scene.dt, &scene.obstacles).unwrap();
-            assert_eq!(
-                bits(&scene.cloth),
-                bits(&resumed),
-                "{integrator}: frame {frame} differs after resuming"
-            );
+    }
+}
+
+#[test]
+fn a_snapshot_resumes_bit_for_bit_with_spring_classes_split_across_threads() {
+    // N = 96: colour classes large enough for the parallel feature to split them.
+    for integrator in [
+        Integrator::SymplecticEuler,
+        Integrator::ImplicitEuler,
+        Integrator::FastMassSpring,
+    ] {
+        let mut scene = scene_with(SceneKind::Drape, 96, integrator);
+        if integrator.is_explicit() {
+            scene.solver.settings.substeps = Substeps::Fixed(150);
         }
+        snapshot_resumes(scene, 3, 3, integrator.name());
     }
 }
 
@@ -101,8 +130,8 @@ proptest! {
     ) {
         let mut m = Material::by_name(material).unwrap();
         m.stretch.stiffness *= stiffness_scale;
-        let mut cloth = ClothBuilder::new(cols, rows).size(0.8, 0.6).material(m).pins(preset).integrator(integrator).build().unwrap();
-        cloth.params.substeps = fixed_substeps.map_or(Substeps::Auto, Substeps::Fixed);
+        let mut cloth = Simulation::new(ClothBuilder::new(cols, rows).size(0.8, 0.6).material(m).pins(preset).build().unwrap()).with_integrator(integrator);
+        cloth.solver.settings.substeps = fixed_substeps.map_or(Substeps::Auto, Substeps::Fixed);
         cloth.params.wind = Wind::new(Vector::new(1.0, 0.2, 0.5), wind);
         let obstacle = Obstacle::new(shape, pose);
         let pinned: Vec<(usize, Vector)> = cloth.pinned().into_iter().map(|i| (i, cloth.positions()[i])).collect();

@@ -100,16 +100,12 @@ fn hand_written_scene_files_run_from_the_command() {
 
 #[test]
 fn the_capsule_file_drapes_the_scarf_over_the_capsule() {
-    let mut scene = file::load_scene(
-        example("capsule_drape.ron").as_ref(),
-        &SceneOptions::default(),
-    )
-    .unwrap();
+    let mut scene = Scene::open(&example("capsule_drape.ron"), &SceneOptions::default()).unwrap();
     assert_eq!(scene.name, "capsule-drape");
     assert_eq!(scene.cloth.material.name, "light silk");
     assert_eq!(scene.obstacles.len(), 2);
     let frames = scene.frames;
-    cloth3d::metrics::run(&mut scene, frames).unwrap();
+    cloth3d::scenes::run(&mut scene, frames).unwrap();
     // The capsule's top is at y = 0.42; the scarf hangs over it, its middle on top.
     let middle = scene.cloth.positions()[12 * 48 + 24];
     assert!((middle.y - 0.43).abs() < 0.03, "{middle}");
@@ -125,8 +121,7 @@ fn the_capsule_file_drapes_the_scarf_over_the_capsule() {
 
 #[test]
 fn the_cape_follows_its_spinning_body() {
-    let mut scene =
-        file::load_scene(example("cape.ron").as_ref(), &SceneOptions::default()).unwrap();
+    let mut scene = Scene::open(&example("cape.ron"), &SceneOptions::default()).unwrap();
     let side = scene.rapier.as_ref().unwrap();
     assert_eq!(side.all_bodies.len(), 2);
     assert_eq!(side.coupling.attachments().len(), 3);
@@ -292,7 +287,7 @@ fn the_readme_scene_file_runs() {
     let end = start + readme[start..].find("```").unwrap();
     let desc = file::from_ron(&readme[start..end]).unwrap();
     let mut scene = Scene::from_desc(desc).unwrap();
-    let m = cloth3d::metrics::run(&mut scene, 60).unwrap();
+    let m = cloth3d::scenes::run(&mut scene, 60).unwrap();
     assert!(m.finite && m.max_penetration_any_frame <= 0.002, "{m:?}");
 }
 

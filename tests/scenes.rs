@@ -1,10 +1,10 @@
 //! Every canonical scene runs its default length with finite, sensible results.
 
-use cloth3d::metrics::run;
 use cloth3d::prelude::*;
+use cloth3d::scenes::run;
 use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
 
-fn run_scene(kind: SceneKind, options: SceneOptions) -> cloth3d::metrics::RunMetrics {
+fn run_scene(kind: SceneKind, options: SceneOptions) -> cloth3d::scenes::RunMetrics {
     let mut scene = Scene::build(kind, &options).unwrap();
     let frames = scene.frames;
     let m = run(&mut scene, frames).unwrap();

@@ -68,7 +68,7 @@ fn materials_reject_bad_stiffness_damping_and_density() {
 
 #[test]
 fn step_rejects_bad_parameters_and_keeps_the_cloth() {
-    let mut cloth = ClothBuilder::new(5, 5).build().unwrap();
+    let mut cloth = Simulation::new(ClothBuilder::new(5, 5).build().unwrap());
     let before = cloth.clone();
     for dt in [0.0, -0.01, f32::NAN, f32::INFINITY] {
         assert!(cloth.step(dt, &[]).is_err(), "dt = {dt}");
@@ -79,9 +79,9 @@ fn step_rejects_bad_parameters_and_keeps_the_cloth() {
         Err(ClothError::NonFinite { .. })
     ));
     cloth.params.gravity = Vector::new(0.0, -9.81, 0.0);
-    cloth.params.substeps = Substeps::Fixed(0);
+    cloth.solver.settings.substeps = Substeps::Fixed(0);
     assert!(cloth.step(0.01, &[]).is_err());
-    cloth.params.substeps = Substeps::Auto;
+    cloth.solver.settings.substeps = Substeps::Auto;
     cloth.material.shear.stiffness = -5.0;
     assert!(cloth.step(0.01, &[]).is_err());
     cloth.material.shear.stiffness = 150.0;
@@ -102,13 +102,15 @@ fn step_rejects_bad_parameters_and_keeps_the_cloth() {
 
 #[test]
 fn a_diverging_step_restores_the_cloth_and_suggests_substeps() {
-    let mut cloth = ClothBuilder::new(24, 24)
-        .pins(PinPreset::TwoCorners)
-        .integrator(Integrator::ExplicitEuler)
-        .build()
-        .unwrap();
+    let mut cloth = Simulation::new(
+        ClothBuilder::new(24, 24)
+            .pins(PinPreset::TwoCorners)
+            .build()
+            .unwrap(),
+    )
+    .with_integrator(Integrator::ExplicitEuler);
     cloth.material.stretch.stiffness = 1.0e5;
-    cloth.params.substeps = Substeps::Fixed(1);
+    cloth.solver.settings.substeps = Substeps::Fixed(1);
     let mut before = cloth.positions().to_vec();
     let mut result = Ok(Default::default());
     for _ in 0..30 {
@@ -136,7 +138,7 @@ fn a_diverging_step_restores_the_cloth_and_suggests_substeps() {
     assert!(cloth.is_finite());
     // The user changes the parameters and steps again.
     cloth.set_integrator(Integrator::SymplecticEuler);
-    cloth.params.substeps = Substeps::Auto;
+    cloth.solver.settings.substeps = Substeps::Auto;
     cloth.step(1.0 / 60.0, &[]).unwrap();
     assert!(cloth.is_finite());
 }

@@ -4,10 +4,12 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use cloth3d::cloth::{Material, PinPreset, Substeps};
-use cloth3d::integrators::{Integrator, Preconditioner};
-use cloth3d::metrics::{run_with, RunMetrics};
-use cloth3d::scenes::{file, Scene, SceneKind, SceneOptions};
+use cloth3d::cli::args::{
+    parse_count, parse_frames, parse_integrator, parse_n, parse_scene, SceneArgs,
+};
+use cloth3d::cloth::{Material, PinPreset};
+use cloth3d::scenes::{file, run_with, RunMetrics, Scene, SceneKind};
+use cloth3d::solver::Integrator;
 
 #[derive(Parser)]
 #[command(
@@ -45,63 +47,14 @@ struct ExportSceneArgs {
     output: Option<std::path::PathBuf>,
 }
 
-/// The choices that change a scene, shared by `run` and `export-scene`.
-#[derive(clap::Args)]
-struct SceneArgs {
-    /// Particles along a row (rows follow the scene's aspect ratio).
-    #[arg(long, value_parser = parse_n, allow_hyphen_values = true)]
-    n: Option<usize>,
-    /// Time integrator.
-    #[arg(long, value_parser = parse_integrator)]
-    integrator: Option<Integrator>,
-    /// Material preset.
-    #[arg(long, value_parser = parse_material)]
-    material: Option<Material>,
-    /// Frame step in seconds.
-    #[arg(long, value_parser = parse_positive, allow_hyphen_values = true)]
-    dt: Option<f32>,
-    /// Substeps per frame: a whole number >= 1, or `auto`.
-    #[arg(long, value_parser = parse_substeps)]
-    substeps: Option<Substeps>,
-    /// Frames to simulate.
-    #[arg(long, value_parser = parse_frames, allow_hyphen_values = true)]
-    frames: Option<u32>,
-    /// Pin variant (the `pins` scene; for a scene file, any pin preset).
-    #[arg(long, value_parser = parse_variant)]
-    variant: Option<PinPreset>,
-    /// Friction coefficient of the obstacles.
-    #[arg(long, value_parser = parse_non_negative, allow_hyphen_values = true)]
-    friction: Option<f32>,
-}
-
-impl SceneArgs {
-    fn options(&self) -> SceneOptions {
-        SceneOptions {
-            n: self.n,
-            integrator: self.integrator,
-            material: self.material.clone(),
-            variant: self.variant,
-            dt: self.dt,
-            substeps: self.substeps,
-            frames: self.frames,
-            friction: self.friction,
-        }
-    }
-}
-
 #[derive(clap::Args)]
 struct CompareArgs {
     /// Scene name, or path to a RON scene file.
     scene: String,
-    /// Particles along a row.
-    #[arg(long, value_parser = parse_n, allow_hyphen_values = true)]
-    n: Option<usize>,
-    /// Frame step in seconds.
-    #[arg(long, value_parser = parse_positive, allow_hyphen_values = true)]
-    dt: Option<f32>,
-    /// Frames to simulate.
-    #[arg(long, value_parser = parse_frames, allow_hyphen_values = true)]
-    frames: Option<u32>,
+    /// The scene's flags; every integrator runs in turn at its default
+    /// substeps, so `--integrator` and `--substeps` are replaced per row.
+    #[command(flatten)]
+    options: SceneArgs,
     /// Where to write the plot of energy (top) and max stretch (bottom).
     #[arg(long, default_value = "compare.png")]
     plot: std::path::PathBuf,
@@ -147,25 +100,9 @@ struct RunArgs {
     scene: String,
     #[command(flatten)]
     options: SceneArgs,
-    /// Linearisations (Newton iterations) per substep (implicit-euler).
-    #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
-    newton_iterations: Option<u32>,
-    /// Maximum conjugate-gradient iterations per linearisation (implicit-euler).
-    #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
-    cg_iterations: Option<u32>,
-    /// Relative residual at which conjugate gradient stops (implicit-euler).
-    #[arg(long, value_parser = parse_positive, allow_hyphen_values = true)]
-    cg_tolerance: Option<f32>,
-    /// Conjugate-gradient preconditioner (implicit-euler): block-jacobi or
-    /// spring-space (converges for very stiff springs, costlier per iteration).
-    #[arg(long, value_parser = parse_preconditioner)]
-    preconditioner: Option<Preconditioner>,
     /// Write the cloth of every frame as DIR/frame_0001.obj, ... (Blender's OBJ sequence import).
     #[arg(long, value_name = "DIR")]
     export_obj: Option<std::path::PathBuf>,
-    /// Local/global iterations per substep (fast-mass-spring).
-    #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
-    fms_iterations: Option<u32>,
     /// Write the animation as one glTF 2.0 binary file: the final frame's
     /// mesh, with every frame as a morph target played by an animation.
     #[arg(long, value_name = "FILE.glb")]
@@ -179,71 +116,6 @@ struct RunArgs {
     /// Print exactly one JSON object and nothing else on stdout.
     #[arg(long)]
     json: bool,
-}
-
-fn parse_scene(s: &str) -> Result<SceneKind, String> {
-    SceneKind::from_name(s).map_err(|e| e.to_string())
-}
-fn parse_integrator(s: &str) -> Result<Integrator, String> {
-    Integrator::from_name(s).map_err(|e| e.to_string())
-}
-fn parse_preconditioner(s: &str) -> Result<Preconditioner, String> {
-    Preconditioner::from_name(s).map_err(|e| e.to_string())
-}
-fn parse_material(s: &str) -> Result<Material, String> {
-    Material::by_name(s).map_err(|e| e.to_string())
-}
-fn parse_variant(s: &str) -> Result<PinPreset, String> {
-    PinPreset::from_name(s).map_err(|e| e.to_string())
-}
-fn parse_substeps(s: &str) -> Result<Substeps, String> {
-    s.parse()
-}
-fn parse_number<T: std::str::FromStr>(s: &str, what: &str) -> Result<T, String> {
-    s.parse().map_err(|_| format!("'{s}' is not {what}"))
-}
-fn parse_positive(s: &str) -> Result<f32, String> {
-    let v: f32 = parse_number(s, "a number")?;
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("'{s}' must be a finite number > 0"))
-    }
-}
-fn parse_non_negative(s: &str) -> Result<f32, String> {
-    let v: f32 = parse_number(s, "a number")?;
-    if v.is_finite() && v >= 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("'{s}' must be a finite number >= 0"))
-    }
-}
-fn parse_n(s: &str) -> Result<usize, String> {
-    let n: usize = parse_number(s, "a whole number")?;
-    if (2..=4096).contains(&n) {
-        Ok(n)
-    } else {
-        Err(format!("'{s}' must be between 2 and 4096"))
-    }
-}
-fn parse_iterations(s: &str) -> Result<u32, String> {
-    let f: u32 = parse_number(s, "a whole number")?;
-    if f >= 1 {
-        Ok(f)
-    } else {
-        Err("iterations must be at least 1".into())
-    }
-}
-fn parse_count(s: &str) -> Result<u32, String> {
-    parse_number(s, "a whole number")
-}
-fn parse_frames(s: &str) -> Result<u32, String> {
-    let f: u32 = parse_number(s, "a whole number")?;
-    if f >= 1 {
-        Ok(f)
-    } else {
-        Err("frames must be at least 1".into())
-    }
 }
 
 fn main() -> ExitCode {
@@ -398,22 +270,6 @@ fn run_command(args: RunArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let params = &mut scene.cloth.params;
-    if let Some(it) = args.newton_iterations {
-        params.newton_iterations = it;
-    }
-    if let Some(it) = args.cg_iterations {
-        params.cg_max_iterations = it;
-    }
-    if let Some(tol) = args.cg_tolerance {
-        params.cg_tolerance = tol;
-    }
-    if let Some(p) = args.preconditioner {
-        params.preconditioner = p;
-    }
-    if let Some(it) = args.fms_iterations {
-        params.fms_iterations = it;
-    }
     let frames = scene.frames;
     if let Some(dir) = &args.export_obj {
         if let Err(e) = std::fs::create_dir_all(dir) {
@@ -426,7 +282,7 @@ fn run_command(args: RunArgs) -> ExitCode {
         .export_glb
         .as_ref()
         .map(|_| cloth3d::export::Animation::new(scene.dt));
-    let mut series = cloth3d::metrics::Series::default();
+    let mut series = cloth3d::scenes::Series::default();
     let bar = progress_bar(frames, args.quiet, &scene.name);
     let result = run_with(&mut scene, frames, |scene, frame, max_penetration| {
         bar.inc(1);
@@ -450,8 +306,7 @@ fn run_command(args: RunArgs) -> ExitCode {
         }
     }
     if let (Some(path), None) = (&args.plot, &export_error) {
-        if let Err(e) = series
-            .plot(&scene.name, 900, 900)
+        if let Err(e) = cloth3d::cli::plot::series(&series, &scene.name, 900, 900)
             .and_then(|img| img.save(path).map_err(|e| e.to_string()))
         {
             export_error = Some(format!("cannot write {}: {e}", path.display()));
@@ -484,16 +339,10 @@ fn run_command(args: RunArgs) -> ExitCode {
 }
 
 fn compare_command(args: CompareArgs) -> ExitCode {
-    use cloth3d::compare::{compare_desc, plot, COLORS};
-    let options = SceneOptions {
-        n: args.n,
-        dt: args.dt,
-        ..Default::default()
-    };
-    let rows = Scene::open(&args.scene, &options).and_then(|scene| {
-        let frames = args.frames.unwrap_or(scene.frames);
-        compare_desc(&scene.desc, frames)
-    });
+    use cloth3d::cli::compare::{compare_desc, plot, COLORS};
+    let options = args.options.options();
+    let rows = Scene::open(&args.scene, &options)
+        .and_then(|scene| compare_desc(&scene.desc, scene.frames));
     let rows = match rows {
         Ok(rows) => rows,
         Err(e) => {
@@ -586,7 +435,7 @@ fn bench_command(args: BenchArgs) -> ExitCode {
 }
 
 fn bench_rows(args: &BenchArgs) -> ExitCode {
-    use cloth3d::bench::{bench_cloth3d, bench_rapier_drape, BenchRow};
+    use cloth3d::cli::bench::{bench_cloth3d, bench_rapier_drape, BenchRow};
     if !args.json {
         emit(&format!(
             "{:<8} {:>5} {:<18} {:>8} {:>11} {:>14} {:>14} {:>9} {:>9} {:>9}\n",
@@ -657,7 +506,7 @@ fn bench_rows(args: &BenchArgs) -> ExitCode {
         }
     }
     if !args.json {
-        let lines = cloth3d::bench::target_lines(&rows);
+        let lines = cloth3d::cli::bench::target_lines(&rows);
         if !lines.is_empty() {
             emit("\ntargets (issue 7):\n");
             for line in lines {
@@ -666,7 +515,7 @@ fn bench_rows(args: &BenchArgs) -> ExitCode {
         }
     }
     if let Some(path) = &args.plot {
-        let written = cloth3d::bench::plot(&rows, 900, 560)
+        let written = cloth3d::cli::bench::plot(&rows, 900, 560)
             .and_then(|img| img.save(path).map_err(|e| e.to_string()));
         if let Err(e) = written {
             eprintln!("error: {}: {e}", path.display());

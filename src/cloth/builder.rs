@@ -1,9 +1,14 @@
 //! The grid builder.
 
+use std::sync::Arc;
+
+use super::cloth::Cloth;
+use super::material::Material;
+use super::physics::PhysicsParams;
+use super::pins::PinPreset;
 use super::springs::{grid_topology, Spring};
-use super::{Cloth, Grid, Material, PinPreset, SimulationParams};
+use super::topology::Grid;
 use crate::error::{positive, ClothError};
-use crate::integrators::Integrator;
 use crate::math::{Pose, Rotation, Vector};
 
 /// How the mass of a grid cloth is given.
@@ -46,7 +51,7 @@ pub struct ClothBuilder {
     material: Material,
     preset: PinPreset,
     pins: Vec<usize>,
-    params: SimulationParams,
+    params: PhysicsParams,
 }
 
 impl ClothBuilder {
@@ -63,7 +68,7 @@ impl ClothBuilder {
             material: Material::cotton(),
             preset: PinPreset::None,
             pins: Vec::new(),
-            params: SimulationParams::default(),
+            params: PhysicsParams::default(),
         }
     }
 
@@ -125,15 +130,9 @@ impl ClothBuilder {
         self
     }
 
-    /// The simulation parameters.
-    pub fn params(mut self, params: SimulationParams) -> Self {
+    /// The physical parameters: gravity, air drag, wind, thickness.
+    pub fn params(mut self, params: PhysicsParams) -> Self {
         self.params = params;
-        self
-    }
-
-    /// The integrator.
-    pub fn integrator(mut self, integrator: Integrator) -> Self {
-        self.params.integrator = integrator;
         self
     }
 
@@ -198,8 +197,9 @@ impl ClothBuilder {
             triangles,
             self.material,
         )?;
-        cloth.uvs = uvs;
-        cloth.grid = Some(Grid { cols, rows });
+        let topology = Arc::make_mut(&mut cloth.topology);
+        topology.uvs = uvs;
+        topology.grid = Some(Grid { cols, rows });
         cloth.params = self.params;
         cloth.apply_pin_preset(self.preset)?;
         for i in self.pins {

@@ -1,18 +1,23 @@
-//! Collision with parry3d shapes: obstacles, point contacts, and their resolution.
+//! Collision with parry3d shapes: obstacles, point contacts, the particles'
+//! contact set, and the collision stage of a step that resolves them.
 //!
 //! A particle closer to an obstacle than the cloth's thickness is moved to the
 //! surface projection plus the thickness along the outward normal; its velocity
 //! relative to the surface loses the part going into the surface and its
-//! tangential part gets Coulomb friction. Stretch and shear springs are then
-//! sampled at 1/4, 1/2 and 3/4 of their length so the cloth cannot cut through
-//! edges and corners.
+//! tangential part gets Coulomb friction (unless the solver decided friction
+//! itself: [`FrictionPolicy`]). Stretch and shear springs are then sampled so
+//! the cloth cannot cut through edges and corners.
 
 mod contact;
+mod contact_set;
+mod edges;
 mod obstacle;
-mod resolve;
 mod response;
+mod stage;
+mod tracks;
 
 pub use contact::{contact, penetration_depth, Contact};
+pub use contact_set::{ContactSet, ParticleContact};
 pub use obstacle::{DynamicBody, Obstacle, ObstacleImpulse};
-pub(crate) use resolve::Collider;
-pub(crate) use response::Response;
+pub use response::{respond, FrictionPolicy, Response};
+pub use stage::CollisionStage;

@@ -10,9 +10,21 @@
 
 use crate::math::Vector;
 
+/// Who decides Coulomb friction in a substep: the collision stage after
+/// the solver's step, or the solver inside its solve. The solver hands it
+/// back with its substep.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrictionPolicy {
+    /// The collision stage applies friction to the touching particles.
+    Apply,
+    /// The solver decided friction inside its solve; the collision stage only
+    /// puts particles back on the surfaces.
+    AlreadySolved,
+}
+
 /// A contact's role in one substep.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum Response {
+pub enum Response {
     /// Not pressed against the surface: no constraint.
     Free,
     /// Held by static friction: ends the substep with this velocity relative
@@ -36,7 +48,7 @@ pub(crate) enum Response {
 /// `rel` is the particle's velocity relative to the surface now, `predicted`
 /// what it would be at the end of the substep of `h` seconds under the
 /// current forces, unconstrained.
-pub(crate) fn respond(
+pub fn respond(
     rel: Vector,
     predicted: Vector,
     normal: Vector,

@@ -14,12 +14,17 @@ use serde::{Deserialize, Serialize};
 use parry3d::shape::SharedShape;
 use rapier3d::prelude::{ColliderBuilder, RigidBodyBuilder};
 
-use crate::cloth::{Material, PinPreset, Substeps, Wind};
+use crate::cloth::{Material, PinPreset, Wind};
 use crate::error::ClothError;
-use crate::integrators::Integrator;
 use crate::math::{Pose, Rotation, Vector};
+use crate::solver::SolverSettings;
 
-use super::{CLOTH_MASS, FRAME_DT, THICKNESS};
+/// The frame step of every scene, in seconds.
+pub const FRAME_DT: f32 = 1.0 / 60.0;
+/// Collision thickness of every scene, in metres.
+pub const THICKNESS: f32 = 0.01;
+/// Total cloth mass of every scene, in kg.
+pub const CLOTH_MASS: f32 = 1.0;
 
 /// A whole scene: the cloth, what it collides with, the forces and how to step it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -71,18 +76,16 @@ pub struct SceneDesc {
         deserialize_with = "crate::error::de::non_negative"
     )]
     pub friction: f32,
-    /// The time integrator.
-    #[serde(default = "default_integrator")]
-    pub integrator: Integrator,
+    /// How the cloth is stepped: integrator, substeps, iterations. Every
+    /// field has a default, so a file may give only those it changes.
+    #[serde(default)]
+    pub solver: SolverSettings,
     /// Frame step, in seconds.
     #[serde(
         default = "default_dt",
         deserialize_with = "crate::error::de::positive"
     )]
     pub dt: f32,
-    /// Substeps per frame: `Auto` or `Fixed(k)`.
-    #[serde(default = "default_substeps", deserialize_with = "substeps")]
-    pub substeps: Substeps,
     /// Frames a run lasts.
     #[serde(
         default = "default_frames",
@@ -576,9 +579,8 @@ impl SceneDesc {
             air_drag: default_air_drag(),
             thickness: default_thickness(),
             friction: default_friction(),
-            integrator: default_integrator(),
+            solver: SolverSettings::default(),
             dt: default_dt(),
-            substeps: default_substeps(),
             frames: default_frames(),
         }
     }
@@ -606,7 +608,7 @@ fn default_gravity() -> Vector {
     Vector::new(0.0, -9.81, 0.0)
 }
 fn default_air_drag() -> f32 {
-    crate::cloth::SimulationParams::default().air_drag
+    crate::cloth::PhysicsParams::default().air_drag
 }
 fn default_thickness() -> f32 {
     THICKNESS
@@ -614,14 +616,8 @@ fn default_thickness() -> f32 {
 fn default_friction() -> f32 {
     0.5
 }
-fn default_integrator() -> Integrator {
-    Integrator::SymplecticEuler
-}
 fn default_dt() -> f32 {
     FRAME_DT
-}
-fn default_substeps() -> Substeps {
-    Substeps::Auto
 }
 fn default_frames() -> u32 {
     120
@@ -651,16 +647,6 @@ fn positive_pair<'de, D: serde::Deserializer<'de>>(d: D) -> Result<(f32, f32), D
         Err(D::Error::custom(format!(
             "invalid size ({a}, {b}): both must be finite numbers > 0"
         )))
-    }
-}
-
-fn substeps<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Substeps, D::Error> {
-    use serde::de::Error;
-    match Substeps::deserialize(d)? {
-        Substeps::Fixed(0) => Err(D::Error::custom(
-            "invalid substeps Fixed(0): expected Auto or Fixed(k) with k >= 1",
-        )),
-        s => Ok(s),
     }
 }
 

@@ -17,14 +17,14 @@
 //! )"#;
 //! let desc = file::from_ron(text)?;
 //! let mut scene = Scene::from_desc(desc)?;
-//! let metrics = cloth3d::metrics::run(&mut scene, 30)?;
+//! let metrics = cloth3d::scenes::run(&mut scene, 30)?;
 //! assert!(metrics.finite && metrics.max_penetration < 0.002);
 //!
 //! // A mistake is reported with its line and field.
 //! let err = file::from_ron(&text.replace("cols: 16", "cols: 1")).unwrap_err();
 //! assert!(err.to_string().starts_with("line 4"), "{err}");
 //! assert!(err.to_string().contains("cloth.cols"), "{err}");
-//! # Ok::<(), cloth3d::ClothError>(())
+//! # Ok::<(), cloth3d::SceneError>(())
 //! ```
 
 use std::path::Path;
@@ -32,11 +32,10 @@ use std::path::Path;
 use ron::ser::PrettyConfig;
 
 use super::desc::SceneDesc;
-use super::{Scene, SceneOptions};
-use crate::error::ClothError;
+use super::error::SceneError;
 
 /// Reads a scene from RON text. Errors carry the line, column and field path.
-pub fn from_ron(text: &str) -> Result<SceneDesc, ClothError> {
+pub fn from_ron(text: &str) -> Result<SceneDesc, SceneError> {
     let mut de = ron::Deserializer::from_str(text).map_err(|e| spanned(e, String::new()))?;
     let desc = match serde_path_to_error::deserialize::<_, SceneDesc>(&mut de) {
         Ok(desc) => desc,
@@ -52,12 +51,12 @@ pub fn from_ron(text: &str) -> Result<SceneDesc, ClothError> {
 }
 
 /// Writes a scene as pretty RON text that [`from_ron`] reads back to the same description.
-pub fn to_ron(desc: &SceneDesc) -> Result<String, ClothError> {
+pub fn to_ron(desc: &SceneDesc) -> Result<String, SceneError> {
     let config = PrettyConfig::new()
         .struct_names(false)
         .depth_limit(6)
         .separate_tuple_members(false);
-    let mut text = ron::ser::to_string_pretty(desc, config).map_err(|e| ClothError::SceneFile {
+    let mut text = ron::ser::to_string_pretty(desc, config).map_err(|e| SceneError::File {
         path: String::new(),
         line: 0,
         column: 0,
@@ -69,36 +68,39 @@ pub fn to_ron(desc: &SceneDesc) -> Result<String, ClothError> {
 }
 
 /// Reads a scene file. Errors name the file, line, column and field.
-pub fn load(path: &Path) -> Result<SceneDesc, ClothError> {
+pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
     from_ron(&read(path)?).map_err(|e| in_file(e, path))
 }
 
-/// Reads a scene file, applies `options` and builds the scene. Every error
-/// that comes from the file names the file, its line and field.
-pub fn load_scene(path: &Path, options: &SceneOptions) -> Result<Scene, ClothError> {
+/// Reads a scene file and hands its description to `build`; every error,
+/// the file's or `build`'s, that names a field of the description names the
+/// file and the field's line too.
+pub fn load_with<T>(
+    path: &Path,
+    build: impl FnOnce(SceneDesc) -> Result<T, SceneError>,
+) -> Result<T, SceneError> {
     let text = read(path)?;
-    let mut desc = from_ron(&text).map_err(|e| in_file(e, path))?;
-    desc.apply(options)?;
-    Scene::from_desc(desc).map_err(|e| in_file(locate(e, &text), path))
+    let desc = from_ron(&text).map_err(|e| in_file(e, path))?;
+    build(desc).map_err(|e| in_file(locate(e, &text), path))
 }
 
-fn read(path: &Path) -> Result<String, ClothError> {
-    std::fs::read_to_string(path).map_err(|e| ClothError::Io {
+fn read(path: &Path) -> Result<String, SceneError> {
+    std::fs::read_to_string(path).map_err(|e| SceneError::Io {
         path: path.display().to_string(),
         message: e.to_string(),
     })
 }
 
 /// Names `path` in a scene-file error.
-fn in_file(err: ClothError, path: &Path) -> ClothError {
+fn in_file(err: SceneError, path: &Path) -> SceneError {
     match err {
-        ClothError::SceneFile {
+        SceneError::File {
             line,
             column,
             field,
             message,
             ..
-        } => ClothError::SceneFile {
+        } => SceneError::File {
             path: path.display().to_string(),
             line,
             column,
@@ -111,9 +113,9 @@ fn in_file(err: ClothError, path: &Path) -> ClothError {
 
 /// Places an error found while building a parsed scene (which names its
 /// field but has no line) at the line of that field in `text`.
-pub fn locate(err: ClothError, text: &str) -> ClothError {
+pub fn locate(err: SceneError, text: &str) -> SceneError {
     match err {
-        ClothError::SceneFile {
+        SceneError::File {
             path,
             line: 0,
             field,
@@ -121,7 +123,7 @@ pub fn locate(err: ClothError, text: &str) -> ClothError {
             ..
         } if !field.is_empty() => {
             let (line, column) = find_field(text, &field).unwrap_or((0, 0));
-            ClothError::SceneFile {
+            SceneError::File {
                 path,
                 line,
                 column,
@@ -160,8 +162,8 @@ fn find_field(text: &str, field: &str) -> Option<(usize, usize)> {
     Some((line, column))
 }
 
-fn spanned(e: ron::error::SpannedError, field: String) -> ClothError {
-    ClothError::SceneFile {
+fn spanned(e: ron::error::SpannedError, field: String) -> SceneError {
+    SceneError::File {
         path: String::new(),
         line: e.span.start.line,
         column: e.span.start.col,

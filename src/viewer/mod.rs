@@ -331,7 +331,7 @@ impl OffscreenRenderer {
         let label = format!(
             "{}  |  {}  |  {}  |  {} particles  |  frame {}",
             scene.name,
-            scene.cloth.params.integrator,
+            scene.solver.integrator(),
             scene.cloth.material.name,
             scene.cloth.particle_count(),
             scene.frame

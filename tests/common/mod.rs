@@ -13,7 +13,7 @@ pub fn spring_material(k: f32, c: f32) -> Material {
 /// One particle of mass `m` (kg) hanging on a spring of stiffness `k` and
 /// damping `c` from a pinned particle at the origin; rest length 1 m,
 /// stretched by `amplitude` m; no gravity, no drag.
-pub fn oscillator(m: f32, k: f32, c: f32, amplitude: f32, integrator: Integrator) -> Cloth {
+pub fn oscillator(m: f32, k: f32, c: f32, amplitude: f32, integrator: Integrator) -> Simulation {
     let springs = vec![Spring {
         a: 0,
         b: 1,
@@ -21,18 +21,20 @@ pub fn oscillator(m: f32, k: f32, c: f32, amplitude: f32, integrator: Integrator
         kind: SpringKind::Stretch,
     }];
     let positions = vec![Vector::ZERO, Vector::new(1.0 + amplitude, 0.0, 0.0)];
-    let mut cloth = Cloth::from_parts(
-        positions,
-        vec![1.0, m],
-        springs,
-        vec![],
-        spring_material(k, c),
-    )
-    .unwrap();
+    let mut cloth = Simulation::new(
+        Cloth::from_parts(
+            positions,
+            vec![1.0, m],
+            springs,
+            vec![],
+            spring_material(k, c),
+        )
+        .unwrap(),
+    );
     cloth.pin(0).unwrap();
     cloth.params.gravity = Vector::ZERO;
     cloth.params.air_drag = 0.0;
-    cloth.params.substeps = Substeps::Fixed(1);
+    cloth.solver.settings.substeps = Substeps::Fixed(1);
     cloth.set_integrator(integrator);
     cloth
 }

@@ -32,41 +32,18 @@
 use glam::Mat3;
 
 use crate::cloth::SpringKind;
-use crate::collision::{Collider, Response};
+use crate::collision::{CollisionStage, ContactSet, Response};
 use crate::forces::{add_wind_forces, ForceModel};
 use crate::math::Vector;
 
+use super::filter::Filter;
+use super::preconditioner::Preconditioner;
 use super::spring_space::SpringSpace;
-use super::{Contacts, Preconditioner};
+use super::substep::Substep;
 
 /// Newton iterations past `newton_iterations` allowed for contacts that the
 /// step itself ran into.
 const CONTACT_ROUNDS: u32 = 4;
-
-/// What constrains a particle during the solve.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) enum Filter {
-    /// Free in every direction.
-    Free,
-    /// Pinned: no velocity change.
-    Fixed,
-    /// Against a surface with this unit normal: free only in its tangent plane.
-    Plane(Vector),
-    /// Held by static friction on a surface with this unit normal: moves
-    /// with the surface.
-    Stick(Vector),
-}
-
-impl Filter {
-    #[inline(always)]
-    fn apply(self, v: Vector) -> Vector {
-        match self {
-            Filter::Free => v,
-            Filter::Fixed | Filter::Stick(_) => Vector::ZERO,
-            Filter::Plane(n) => v - n * n.dot(v),
-        }
-    }
-}
 
 /// Scratch memory of the implicit solver.
 #[derive(Debug, Default)]
@@ -93,6 +70,8 @@ pub(crate) struct ImplicitState {
     ve: Vec<Vector>,
     acc: Vec<Vector>,
     trial: Vec<Vector>,
+    /// Per particle: the obstacle a contact constraint holds it against.
+    obstacle: Vec<u32>,
     /// The stiff springs' preconditioner.
     spring_space: SpringSpace,
 }
@@ -105,6 +84,7 @@ impl ImplicitState {
             buf.resize(n, Mat3::ZERO);
         }
         self.filter.resize(n, Filter::Free);
+        self.obstacle.resize(n, u32::MAX);
         for buf in [
             &mut self.z,
             &mut self.external,
@@ -258,19 +238,17 @@ fn objective(
 /// search: `newton` linearisations, the first being Baraff and Witkin's
 /// single linear solve, and up to [`CONTACT_ROUNDS`] more while the step
 /// still runs into obstacles. Returns the CG iterations used.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn step(
-    model: &ForceModel,
+    sub: &Substep,
     x: &mut [Vector],
     v: &mut [Vector],
     st: &mut ImplicitState,
-    mut contacts: Contacts,
-    h: f32,
-    newton: u32,
-    preconditioner: Preconditioner,
-    max_iterations: u32,
-    tolerance: f32,
+    collision: &mut CollisionStage,
 ) -> u32 {
+    let (model, h) = (&sub.model, sub.ctx.h);
+    let newton = sub.settings.newton_iterations;
+    let (max_iterations, tolerance) = (sub.settings.cg_max_iterations, sub.settings.cg_tolerance);
+    let preconditioner = sub.settings.preconditioner;
     let n = x.len();
     st.resize(n, model.springs.len());
     let mut xe = std::mem::take(&mut st.xe);
@@ -304,7 +282,7 @@ pub(crate) fn step(
         assemble(model, &xe, &ve, &acc, round == 0, h, st);
         if round == 0 {
             // The constraints, from the start state (`st.f` holds its forces).
-            constrain(model, v, st, contacts.collider, h);
+            constrain(model, v, st, collision.contacts(), h);
         }
         for i in 0..n {
             st.b[i] += st.friction[i];
@@ -339,7 +317,7 @@ pub(crate) fn step(
         }
         round += 1;
         // Contacts the step ran into are constraints from now on.
-        let added = activate(model, x, v, &mut acc, st, &mut contacts, h);
+        let added = activate(sub, x, v, &mut acc, st, collision);
         if added {
             phi = objective(model, x, v, &acc, st, h);
         }
@@ -372,8 +350,7 @@ pub(crate) fn step(
                 Filter::Stick(_) => force,
                 _ => nrm * nrm.dot(force),
             };
-            let obstacle = contacts.collider.contact_obstacle[i] as usize;
-            contacts.collider.add_impulse(obstacle, x[i], -reaction);
+            collision.add_impulse(st.obstacle[i] as usize, x[i], -reaction);
         }
     }
     for i in 0..n {
@@ -395,15 +372,15 @@ pub(crate) fn step(
 /// the normal) and constrains them there, sliding without friction, for the
 /// rest of the solve. Returns true when it found any.
 fn activate(
-    model: &ForceModel,
+    sub: &Substep,
     x: &[Vector],
     v: &[Vector],
     acc: &mut [Vector],
     st: &mut ImplicitState,
-    contacts: &mut Contacts,
-    h: f32,
+    collision: &mut CollisionStage,
 ) -> bool {
-    if contacts.obstacles.is_empty() {
+    let (model, h) = (&sub.model, sub.ctx.h);
+    if sub.obstacles.is_empty() {
         return false;
     }
     let mut added = false;
@@ -412,18 +389,15 @@ fn activate(
             continue;
         }
         let end = x[i] + (v[i] + acc[i]) * h;
-        if let Some((o, nrm, depth)) =
-            contacts
-                .collider
-                .penetration(end, contacts.obstacles, contacts.thickness)
+        if let Some((o, nrm, depth)) = collision.penetration(end, sub.obstacles, sub.ctx.thickness)
         {
             // A dynamic body answers through the contact pass after the step.
-            if contacts.obstacles[o].body.is_some() {
+            if sub.obstacles[o].body.is_some() {
                 continue;
             }
             acc[i] += nrm * (depth / h);
             st.filter[i] = Filter::Plane(nrm);
-            contacts.collider.contact_obstacle[i] = o as u32;
+            st.obstacle[i] = o as u32;
             added = true;
         }
     }
@@ -439,16 +413,17 @@ fn constrain(
     model: &ForceModel,
     v: &[Vector],
     st: &mut ImplicitState,
-    contacts: &Collider,
+    contacts: &ContactSet,
     h: f32,
 ) {
     let n = v.len();
     for i in 0..n {
+        st.obstacle[i] = contacts.last_obstacle(i);
         let (filter, z) = if model.inv_mass[i] == 0.0 {
             (Filter::Fixed, Vector::ZERO)
         } else {
-            let nrm = contacts.contact_normal[i];
-            let rel = v[i] - contacts.surface_velocity[i];
+            let nrm = contacts.normal(i);
+            let rel = v[i] - contacts.surface_velocity(i);
             match contacts.response(i, v[i], st.f[i] / model.mass[i], h) {
                 Response::Free => (Filter::Free, Vector::ZERO),
                 Response::Stick { velocity } => (Filter::Stick(nrm), velocity - rel),

@@ -1,6 +1,6 @@
 //! Forward (explicit) Euler.
 
-use super::Workspace;
+use super::workspace::ExplicitScratch;
 use crate::forces::ForceModel;
 use crate::math::Vector;
 
@@ -9,7 +9,7 @@ pub(crate) fn step(
     model: &ForceModel,
     x: &mut [Vector],
     v: &mut [Vector],
-    ws: &mut Workspace,
+    ws: &mut ExplicitScratch,
     h: f32,
 ) {
     model.accelerations(x, v, &mut ws.a);

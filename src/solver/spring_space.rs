@@ -26,7 +26,7 @@ use crate::cloth::SpringKind;
 use crate::forces::ForceModel;
 use crate::math::Vector;
 
-use super::implicit_euler::Filter;
+use super::filter::Filter;
 use super::ordering::nested_dissection;
 
 /// A spring kind is taken exactly when `4 w` exceeds this many times the

@@ -1,6 +1,6 @@
 //! Störmer–Verlet in velocity form.
 
-use super::Workspace;
+use super::workspace::ExplicitScratch;
 use crate::forces::ForceModel;
 use crate::math::Vector;
 
@@ -10,7 +10,7 @@ pub(crate) fn step(
     model: &ForceModel,
     x: &mut [Vector],
     v: &mut [Vector],
-    ws: &mut Workspace,
+    ws: &mut ExplicitScratch,
     h: f32,
 ) {
     model.accelerations(x, v, &mut ws.a);

@@ -6,10 +6,10 @@ use std::time::Instant;
 use image::RgbImage;
 use serde::{Deserialize, Serialize};
 
+use super::plot::{draw, Curve, Panel};
 use crate::error::ClothError;
-use crate::integrators::Integrator;
-use crate::plot::{draw, Curve, Panel};
-use crate::scenes::{Scene, SceneDesc, SceneKind, SceneOptions};
+use crate::scenes::{Scene, SceneDesc, SceneError, SceneKind, SceneOptions};
+use crate::solver::Integrator;
 
 /// How one integrator did.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -41,12 +41,12 @@ pub fn compare(
     kind: SceneKind,
     options: &SceneOptions,
     frames: u32,
-) -> Result<Vec<Comparison>, ClothError> {
+) -> Result<Vec<Comparison>, SceneError> {
     compare_desc(&kind.desc(options)?, frames)
 }
 
 /// [`compare`] on any scene description (a scene file's, for one).
-pub fn compare_desc(desc: &SceneDesc, frames: u32) -> Result<Vec<Comparison>, ClothError> {
+pub fn compare_desc(desc: &SceneDesc, frames: u32) -> Result<Vec<Comparison>, SceneError> {
     let mut rows = Vec::new();
     for integrator in Integrator::ALL {
         let mut desc = desc.clone();
@@ -60,7 +60,7 @@ pub fn compare_desc(desc: &SceneDesc, frames: u32) -> Result<Vec<Comparison>, Cl
         let mut row = Comparison {
             integrator: integrator.name().into(),
             stable: true,
-            substeps: scene.cloth.substeps_for(scene.dt),
+            substeps: scene.solver.substeps_for(&scene.cloth, scene.dt),
             iterations: None,
             max_stretch: 0.0,
             energy_change: 0.0,
@@ -81,7 +81,7 @@ pub fn compare_desc(desc: &SceneDesc, frames: u32) -> Result<Vec<Comparison>, Cl
                     row.stable = false;
                     break;
                 }
-                Err(e) => return Err(e),
+                Err(e) => return Err(e.into()),
             }
             wall += t.elapsed().as_secs_f64();
             row.energy.push(scene.cloth.energy().total());
@@ -98,7 +98,7 @@ pub fn compare_desc(desc: &SceneDesc, frames: u32) -> Result<Vec<Comparison>, Cl
 }
 
 /// A line colour per integrator, in the order of [`Integrator::ALL`].
-pub const COLORS: [[u8; 3]; 6] = crate::plot::COLORS;
+pub const COLORS: [[u8; 3]; 6] = super::plot::COLORS;
 
 /// The plot: energy (top) and max stretch (bottom) against the frame, one
 /// line per integrator in the colours of [`COLORS`], with a legend.

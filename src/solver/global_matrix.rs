@@ -21,6 +21,8 @@ pub(crate) struct FactorKey {
     params: [[u32; 2]; 3],
     particles: usize,
     springs: usize,
+    /// The cloth's masses and pins (`Cloth::mass_revision`).
+    masses: u64,
 }
 
 /// The factor of the global matrix, over the free particles.
@@ -54,7 +56,7 @@ pub(crate) struct Factor {
 }
 
 /// What a factor for this model and step depends on.
-pub(crate) fn key(model: &ForceModel, h: f32, n: usize) -> FactorKey {
+pub(crate) fn key(model: &ForceModel, h: f32, n: usize, masses: u64) -> FactorKey {
     FactorKey {
         h: h.to_bits(),
         params: model
@@ -62,6 +64,7 @@ pub(crate) fn key(model: &ForceModel, h: f32, n: usize) -> FactorKey {
             .map(|p| [p.stiffness.to_bits(), p.damping.to_bits()]),
         particles: n,
         springs: model.springs.len(),
+        masses,
     }
 }
 
@@ -112,7 +115,12 @@ fn free_order(model: &ForceModel, n: usize) -> Vec<u32> {
 }
 
 /// Orders, assembles and factors the global matrix for substeps of `h` seconds.
-pub(crate) fn build_factor(model: &ForceModel, h: f32, n: usize) -> Result<Factor, ClothError> {
+pub(crate) fn build_factor(
+    model: &ForceModel,
+    h: f32,
+    n: usize,
+    key: FactorKey,
+) -> Result<Factor, ClothError> {
     let particle = free_order(model, n);
     let mut row = vec![u32::MAX; n];
     for (r, &i) in particle.iter().enumerate() {
@@ -150,7 +158,7 @@ pub(crate) fn build_factor(model: &ForceModel, h: f32, n: usize) -> Result<Facto
     let chol = CscCholesky::factor(&csc)
         .map_err(|e| ClothError::Solver(format!("Cholesky factorisation failed: {e:?}")))?;
     Ok(Factor {
-        key: key(model, h, n),
+        key,
         row,
         particle,
         l_values: chol.l().values().to_vec(),
@@ -312,6 +320,7 @@ fn elimination_tree(l: &CscMatrix<f64>) -> Vec<usize> {
 mod tests {
     use super::*;
     use crate::cloth::ClothBuilder;
+    use crate::forces::Masses;
 
     /// Solves with the factor for a right-hand side of ones.
     fn solution(f: &Factor) -> Vec<[f64; 3]> {
@@ -327,15 +336,15 @@ mod tests {
         let n = 24;
         let cloth = ClothBuilder::new(n, n).build().unwrap();
         let model = ForceModel::new(
-            &cloth.springs,
+            cloth.topology(),
             &cloth.material,
-            &cloth.triangles,
-            &cloth.particles.mass,
-            &cloth.particles.inv_mass,
+            Masses::of(&cloth.particles),
             &cloth.params,
+            false,
         );
         let h = 1.0 / 60.0;
-        let mut updated = build_factor(&model, h, n * n).unwrap();
+        let key = key(&model, h, n * n, cloth.mass_revision());
+        let mut updated = build_factor(&model, h, n * n, key).unwrap();
         let mut contact = vec![0.0; n * n];
         // Weights come and go on a few rows at a time, as contacts do.
         for round in 0..30usize {
@@ -353,7 +362,7 @@ mod tests {
             updated.updates > 0,
             "the rows changed few at a time were updated"
         );
-        let mut fresh = build_factor(&model, h, n * n).unwrap();
+        let mut fresh = build_factor(&model, h, n * n, key).unwrap();
         fresh.refactor(&contact).unwrap();
         let (a, b) = (solution(&updated), solution(&fresh));
         let worst = a

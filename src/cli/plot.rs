@@ -2,6 +2,8 @@
 //! needed): `cloth3d run --plot` and `cloth3d compare`.
 
 use image::RgbImage;
+
+use crate::scenes::Series;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
@@ -136,4 +138,41 @@ fn draw_panel<DB: DrawingBackend>(
             .map_err(|e| e.to_string())?;
     }
     Ok(())
+}
+
+/// Three panels of a run over time: energy (J), max stretch (%), max penetration (mm).
+pub fn series(series: &Series, title: &str, width: u32, height: u32) -> Result<RgbImage, String> {
+    let curve = |values: &[f64], scale: f64, color: [u8; 3], label: &str| Curve {
+        label: label.to_string(),
+        points: series
+            .time
+            .iter()
+            .zip(values)
+            .map(|(&t, &v)| (t, v * scale))
+            .collect(),
+        color,
+    };
+    let panels = [
+        Panel {
+            title: format!("{title}: total energy"),
+            y_label: "energy (J)".into(),
+            curves: vec![curve(&series.energy, 1.0, COLORS[1], "energy")],
+        },
+        Panel {
+            title: "max stretch".into(),
+            y_label: "stretch (%)".into(),
+            curves: vec![curve(&series.max_stretch, 100.0, COLORS[0], "max stretch")],
+        },
+        Panel {
+            title: "max penetration".into(),
+            y_label: "penetration (mm)".into(),
+            curves: vec![curve(
+                &series.max_penetration,
+                1000.0,
+                COLORS[2],
+                "max penetration",
+            )],
+        },
+    ];
+    draw(&panels, "time (s)", width, height)
 }

@@ -1,6 +1,6 @@
 //! Classical fourth-order Runge–Kutta.
 
-use super::Workspace;
+use super::workspace::ExplicitScratch;
 use crate::forces::ForceModel;
 use crate::math::Vector;
 
@@ -9,11 +9,11 @@ pub(crate) fn step(
     model: &ForceModel,
     x: &mut [Vector],
     v: &mut [Vector],
-    ws: &mut Workspace,
+    ws: &mut ExplicitScratch,
     h: f32,
 ) {
     let n = x.len();
-    let Workspace {
+    let ExplicitScratch {
         a, xt, vt, sx, sv, ..
     } = ws;
     let half = 0.5 * h;

@@ -16,13 +16,13 @@
 //! ends of a spring in every direction, not only along the spring.
 
 use crate::cloth::SpringKind;
-use crate::collision::Response;
+use crate::collision::{CollisionStage, Response};
 use crate::error::ClothError;
-use crate::forces::{add_wind_forces, ForceModel};
+use crate::forces::add_wind_forces;
 use crate::math::Vector;
 
 use super::global_matrix::{build_factor, key, weight, Factor};
-use super::Contacts;
+use super::substep::Substep;
 
 /// Weight of a particle held by static friction in the global matrix, as a
 /// multiple of its own diagonal entry (its mass plus its springs' weights):
@@ -55,13 +55,6 @@ pub(crate) struct FastMassSpringState {
     force: Vec<Vector>,
 }
 
-impl FastMassSpringState {
-    /// Forgets the factor (pins, masses or topology changed).
-    pub fn invalidate(&mut self) {
-        self.factor = None;
-    }
-}
-
 #[inline]
 fn add(a: &mut [f64; 3], v: Vector, s: f64) {
     a[0] += v.x as f64 * s;
@@ -80,21 +73,20 @@ fn add(a: &mut [f64; 3], v: Vector, s: f64) {
 /// new set of held particles costs a numeric refactorisation with the same
 /// pattern. A sliding one gets the kinetic friction impulse. After every
 /// global step the particles are projected out of the obstacles' surfaces.
-/// `held_force` is the particles' hold memory (see `Particles::held_force`).
-#[allow(clippy::too_many_arguments)]
+/// `held_force` is the solver's hold memory (see `SolverState::held_force`).
 pub(crate) fn step(
-    model: &ForceModel,
+    sub: &Substep,
     x: &mut [Vector],
     v: &mut [Vector],
     st: &mut FastMassSpringState,
     held_force: &mut Vec<Vector>,
-    contacts: Contacts,
-    h: f32,
-    iterations: u32,
+    collision: &mut CollisionStage,
 ) -> Result<u32, ClothError> {
+    let (model, h, iterations) = (&sub.model, sub.ctx.h, sub.settings.fms_iterations);
     let n = x.len();
-    if st.factor.as_ref().is_none_or(|f| f.key != key(model, h, n)) {
-        st.factor = Some(build_factor(model, h, n)?);
+    let key = key(model, h, n, sub.mass_revision);
+    if st.factor.as_ref().is_none_or(|f| f.key != key) {
+        st.factor = Some(build_factor(model, h, n, key)?);
         st.factorizations += 1;
     }
     let FastMassSpringState {
@@ -130,9 +122,8 @@ pub(crate) fn step(
     // particle held by static friction gets a stiff spring to where the
     // surface carries it; a sliding one gets the kinetic friction impulse and
     // is kept out by the projections.
-    let collider = &mut *contacts.collider;
     // The forces are needed only for the friction cone of a contact.
-    if !contacts.obstacles.is_empty() {
+    if !sub.obstacles.is_empty() {
         model.forces(x, v, force);
     }
     for (r, &i) in factor.particle.iter().enumerate() {
@@ -140,9 +131,10 @@ pub(crate) fn step(
         contact[r] = 0.0;
         held[r] = Vector::ZERO;
         slide_impulse[r] = Vector::ZERO;
-        let mut response = collider.response(i, v[i], force[i] * model.inv_mass[i], h);
-        let (nrm, surface) = (collider.contact_normal[i], collider.surface_velocity[i]);
-        let mu = collider.contact_friction[i];
+        let contacts = collision.contacts();
+        let mut response = contacts.response(i, v[i], force[i] * model.inv_mass[i], h);
+        let (nrm, surface) = (contacts.normal(i), contacts.surface_velocity(i));
+        let mu = contacts.friction(i);
         // Static friction holds on while the force that held the particle in
         // the last substep stays inside the friction cone: the start-state
         // estimate alone sees every spring's pull, not what the cloth around
@@ -270,7 +262,7 @@ pub(crate) fn step(
                 };
             }
         }
-        collider.project_positions(x, model.inv_mass, contacts.obstacles, contacts.thickness);
+        collision.project_positions(x, model.inv_mass, sub.obstacles, sub.ctx.thickness);
     }
     let inv_h = 1.0 / h;
     for &i in &factor.particle {

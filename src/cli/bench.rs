@@ -9,10 +9,10 @@ use rapier3d::prelude::{
 };
 use serde::{Deserialize, Serialize};
 
-use crate::error::ClothError;
-use crate::integrators::Integrator;
 use crate::math::Vector;
+use crate::scenes::SceneError;
 use crate::scenes::{Scene, SceneKind, SceneOptions, CLOTH_MASS, FRAME_DT};
+use crate::solver::Integrator;
 
 /// One line of the benchmark.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -55,7 +55,7 @@ pub fn bench_cloth3d(
     integrator: Integrator,
     warmup: u32,
     frames: u32,
-) -> Result<BenchRow, ClothError> {
+) -> Result<BenchRow, SceneError> {
     let mut scene = Scene::build(
         kind,
         &SceneOptions {
@@ -181,7 +181,7 @@ pub fn bench_rapier_drape(n: usize, warmup: u32, frames: u32) -> BenchRow {
 /// Wall time per frame against particle count, one curve per engine and
 /// integrator, both axes in powers of ten: the picture in BENCHMARKS.md.
 pub fn plot(rows: &[BenchRow], width: u32, height: u32) -> Result<image::RgbImage, String> {
-    let mut curves: Vec<crate::plot::Curve> = Vec::new();
+    let mut curves: Vec<super::plot::Curve> = Vec::new();
     for row in rows {
         let label = if row.engine == "cloth3d" {
             format!("cloth3d {}", row.integrator)
@@ -195,8 +195,8 @@ pub fn plot(rows: &[BenchRow], width: u32, height: u32) -> Result<image::RgbImag
         match curves.iter_mut().find(|c| c.label == label) {
             Some(c) => c.points.push(point),
             None => {
-                let color = crate::plot::COLORS[curves.len() % crate::plot::COLORS.len()];
-                curves.push(crate::plot::Curve {
+                let color = super::plot::COLORS[curves.len() % super::plot::COLORS.len()];
+                curves.push(super::plot::Curve {
                     label,
                     points: vec![point],
                     color,
@@ -204,12 +204,12 @@ pub fn plot(rows: &[BenchRow], width: u32, height: u32) -> Result<image::RgbImag
             }
         }
     }
-    let panel = crate::plot::Panel {
+    let panel = super::plot::Panel {
         title: "drape: wall time per frame (1/60 s), one thread".into(),
         y_label: "log10 ms per frame".into(),
         curves,
     };
-    crate::plot::draw(&[panel], "log10 particles", width, height)
+    super::plot::draw(&[panel], "log10 particles", width, height)
 }
 
 /// How the rows compare with issue 7's targets, one line each, saying by how

@@ -1,0 +1,155 @@
+//! The flags that change a scene, parsed and range-checked by clap, shared
+//! by the `cloth3d` command and the showcase.
+
+use crate::cloth::{Material, PinPreset};
+use crate::scenes::{SceneKind, SceneOptions, SolverTuning};
+use crate::solver::{Integrator, Preconditioner, Substeps};
+
+/// The choices that change a scene: the same flags, with the same range
+/// checks, for every command that builds one (`run`, `export-scene`,
+/// `compare`) and for the showcase.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct SceneArgs {
+    /// Particles along a row (rows follow the scene's aspect ratio).
+    #[arg(long, value_parser = parse_n, allow_hyphen_values = true)]
+    pub n: Option<usize>,
+    /// Time integrator.
+    #[arg(long, value_parser = parse_integrator)]
+    pub integrator: Option<Integrator>,
+    /// Material preset.
+    #[arg(long, value_parser = parse_material)]
+    pub material: Option<Material>,
+    /// Frame step in seconds.
+    #[arg(long, value_parser = parse_positive, allow_hyphen_values = true)]
+    pub dt: Option<f32>,
+    /// Substeps per frame: a whole number >= 1, or `auto`.
+    #[arg(long, value_parser = parse_substeps)]
+    pub substeps: Option<Substeps>,
+    /// Frames to simulate.
+    #[arg(long, value_parser = parse_frames, allow_hyphen_values = true)]
+    pub frames: Option<u32>,
+    /// Pin variant (the `pins` scene; for a scene file, any pin preset).
+    #[arg(long, value_parser = parse_variant)]
+    pub variant: Option<PinPreset>,
+    /// Friction coefficient of the obstacles.
+    #[arg(long, value_parser = parse_non_negative, allow_hyphen_values = true)]
+    pub friction: Option<f32>,
+    /// Linearisations (Newton iterations) per substep (implicit-euler).
+    #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
+    pub newton_iterations: Option<u32>,
+    /// Maximum conjugate-gradient iterations per linearisation (implicit-euler).
+    #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
+    pub cg_iterations: Option<u32>,
+    /// Relative residual at which conjugate gradient stops (implicit-euler).
+    #[arg(long, value_parser = parse_positive, allow_hyphen_values = true)]
+    pub cg_tolerance: Option<f32>,
+    /// Conjugate-gradient preconditioner (implicit-euler): block-jacobi or
+    /// spring-space (converges for very stiff springs, costlier per iteration).
+    #[arg(long, value_parser = parse_preconditioner)]
+    pub preconditioner: Option<Preconditioner>,
+    /// Local/global iterations per substep (fast-mass-spring).
+    #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
+    pub fms_iterations: Option<u32>,
+}
+
+impl SceneArgs {
+    /// The scene options these flags give.
+    pub fn options(&self) -> SceneOptions {
+        SceneOptions {
+            n: self.n,
+            integrator: self.integrator,
+            material: self.material.clone(),
+            variant: self.variant,
+            dt: self.dt,
+            substeps: self.substeps,
+            frames: self.frames,
+            friction: self.friction,
+            solver: SolverTuning {
+                newton_iterations: self.newton_iterations,
+                cg_iterations: self.cg_iterations,
+                cg_tolerance: self.cg_tolerance,
+                preconditioner: self.preconditioner,
+                fms_iterations: self.fms_iterations,
+                edge_collisions: None,
+            },
+        }
+    }
+}
+
+/// A canonical scene by name.
+pub fn parse_scene(s: &str) -> Result<SceneKind, String> {
+    SceneKind::from_name(s).map_err(|e| e.to_string())
+}
+/// An integrator by name.
+pub fn parse_integrator(s: &str) -> Result<Integrator, String> {
+    Integrator::from_name(s).map_err(|e| e.to_string())
+}
+/// A preconditioner by name.
+pub fn parse_preconditioner(s: &str) -> Result<Preconditioner, String> {
+    Preconditioner::from_name(s).map_err(|e| e.to_string())
+}
+/// A material preset by name.
+pub fn parse_material(s: &str) -> Result<Material, String> {
+    Material::by_name(s).map_err(|e| e.to_string())
+}
+/// A pin preset by name.
+pub fn parse_variant(s: &str) -> Result<PinPreset, String> {
+    PinPreset::from_name(s).map_err(|e| e.to_string())
+}
+/// Substeps: a whole number >= 1 or `auto`.
+pub fn parse_substeps(s: &str) -> Result<Substeps, String> {
+    s.parse()
+}
+/// Any number type, saying what was expected.
+pub fn parse_number<T: std::str::FromStr>(s: &str, what: &str) -> Result<T, String> {
+    s.parse().map_err(|_| format!("'{s}' is not {what}"))
+}
+/// A finite number > 0.
+pub fn parse_positive(s: &str) -> Result<f32, String> {
+    let v: f32 = parse_number(s, "a number")?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("'{s}' must be a finite number > 0"))
+    }
+}
+/// A finite number >= 0.
+pub fn parse_non_negative(s: &str) -> Result<f32, String> {
+    let v: f32 = parse_number(s, "a number")?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("'{s}' must be a finite number >= 0"))
+    }
+}
+/// Particles along a row: 2 to 4096.
+pub fn parse_n(s: &str) -> Result<usize, String> {
+    let n: usize = parse_number(s, "a whole number")?;
+    if (2..=4096).contains(&n) {
+        Ok(n)
+    } else {
+        Err(format!("'{s}' must be between 2 and 4096"))
+    }
+}
+/// Iterations: at least 1.
+pub fn parse_iterations(s: &str) -> Result<u32, String> {
+    let f: u32 = parse_number(s, "a whole number")?;
+    if f >= 1 {
+        Ok(f)
+    } else {
+        Err("iterations must be at least 1".into())
+    }
+}
+/// A whole number >= 0.
+pub fn parse_count(s: &str) -> Result<u32, String> {
+    parse_number(s, "a whole number")
+}
+/// Frames: at least 1.
+pub fn parse_frames(s: &str) -> Result<u32, String> {
+    let f: u32 = parse_number(s, "a whole number")?;
+    if f >= 1 {
+        Ok(f)
+    } else {
+        Err("frames must be at least 1".into())
+    }
+}

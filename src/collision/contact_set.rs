@@ -1,0 +1,144 @@
+//! The contacts of a cloth's particles with the obstacles: one entry per
+//! particle, stored as structure-of-arrays, written only by the collision
+//! stage and read by the solvers through [`ContactSet::get`] and
+//! [`ContactSet::response`].
+
+use super::response::{respond, Response};
+use crate::math::Vector;
+
+/// No obstacle.
+pub(super) const NONE: u32 = u32::MAX;
+
+/// One particle's contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParticleContact {
+    /// The obstacle touched (index into the step's obstacles).
+    pub obstacle: u32,
+    /// Unit outward normal of its surface there.
+    pub normal: Vector,
+    /// Velocity of the surface there, in m/s.
+    pub surface_velocity: Vector,
+    /// True when the obstacle is fixed or kinematic (the cloth's push does not move it).
+    pub immovable: bool,
+    /// Gap (m) between the particle and the surface's thickness layer when
+    /// the contact was detected ahead of the substep; 0 when touching.
+    pub gap: f32,
+    /// Coulomb friction coefficient of the surface.
+    pub friction: f32,
+}
+
+/// Per particle: its contact, if it has one.
+#[derive(Debug, Default)]
+pub struct ContactSet {
+    touching: Vec<bool>,
+    obstacle: Vec<u32>,
+    normal: Vec<Vector>,
+    surface_velocity: Vec<Vector>,
+    immovable: Vec<bool>,
+    gap: Vec<f32>,
+    friction: Vec<f32>,
+}
+
+impl ContactSet {
+    /// Makes room for `particles` particles; contacts carried over from the
+    /// last step must name one of this step's `obstacles`.
+    pub(super) fn begin_step(&mut self, particles: usize, obstacles: usize) {
+        self.touching.resize(particles, false);
+        self.obstacle.resize(particles, NONE);
+        self.immovable.resize(particles, false);
+        self.gap.resize(particles, 0.0);
+        self.friction.resize(particles, 0.0);
+        for i in 0..particles {
+            if self.touching[i] && self.obstacle[i] as usize >= obstacles {
+                self.touching[i] = false;
+            }
+        }
+        self.normal.resize(particles, Vector::ZERO);
+        self.surface_velocity.resize(particles, Vector::ZERO);
+        if obstacles == 0 {
+            self.touching.fill(false);
+        }
+    }
+
+    /// Particle `i`'s contact, if it touches (or is about to reach) an obstacle.
+    pub fn get(&self, i: usize) -> Option<ParticleContact> {
+        self.touching
+            .get(i)
+            .copied()
+            .unwrap_or(false)
+            .then(|| ParticleContact {
+                obstacle: self.obstacle[i],
+                normal: self.normal[i],
+                surface_velocity: self.surface_velocity[i],
+                immovable: self.immovable[i],
+                gap: self.gap[i],
+                friction: self.friction[i],
+            })
+    }
+
+    /// True when particle `i` touches an obstacle.
+    pub fn is_touching(&self, i: usize) -> bool {
+        self.touching.get(i).copied().unwrap_or(false)
+    }
+
+    /// The obstacle particle `i` last touched (stale when it does not touch one now).
+    pub(crate) fn last_obstacle(&self, i: usize) -> u32 {
+        self.obstacle[i]
+    }
+
+    /// The contact normal of particle `i` (stale when it does not touch).
+    pub(crate) fn normal(&self, i: usize) -> Vector {
+        self.normal[i]
+    }
+
+    /// The surface velocity at particle `i` (stale when it does not touch).
+    pub(crate) fn surface_velocity(&self, i: usize) -> Vector {
+        self.surface_velocity[i]
+    }
+
+    /// The friction coefficient at particle `i` (stale when it does not touch).
+    pub(crate) fn friction(&self, i: usize) -> f32 {
+        self.friction[i]
+    }
+
+    /// Particle `i` no longer touches anything.
+    pub(super) fn clear(&mut self, i: usize) {
+        self.touching[i] = false;
+    }
+
+    /// Particle `i` touches: everything but the gap, which only detection ahead of a substep sets.
+    pub(super) fn touch(&mut self, i: usize, c: &ParticleContact) {
+        self.touching[i] = true;
+        self.obstacle[i] = c.obstacle;
+        self.immovable[i] = c.immovable;
+        self.normal[i] = c.normal;
+        self.surface_velocity[i] = c.surface_velocity;
+    }
+
+    /// Particle `i` will reach an obstacle within the substep (or touches it): all of the contact.
+    pub(super) fn detect(&mut self, i: usize, c: &ParticleContact) {
+        self.touch(i, c);
+        self.gap[i] = c.gap;
+        self.friction[i] = c.friction;
+    }
+
+    /// How particle `i`'s contact responds over a substep of `h` seconds,
+    /// for a solver that takes contacts into its solve: `v` is its velocity
+    /// and `accel` its acceleration under the current forces (m/s²). Free
+    /// unless it touches a fixed or kinematic obstacle: a dynamic body would
+    /// be treated as infinitely heavy and thrown back.
+    pub fn response(&self, i: usize, v: Vector, accel: Vector, h: f32) -> Response {
+        if !(self.touching.get(i).copied().unwrap_or(false) && self.immovable[i]) {
+            return Response::Free;
+        }
+        let rel = v - self.surface_velocity[i];
+        respond(
+            rel,
+            rel + accel * h,
+            self.normal[i],
+            self.gap[i],
+            self.friction[i],
+            h,
+        )
+    }
+}

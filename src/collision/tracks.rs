@@ -1,0 +1,143 @@
+//! Where the obstacles are during a step: their poses substep by substep,
+//! the velocities of the dynamic bodies among them as the cloth pushes them,
+//! the broad phase that finds the obstacles near a point, and the momentum
+//! handed to each.
+
+use parry3d::bounding_volume::{Aabb, BoundingVolume};
+use parry3d::partitioning::{Bvh, BvhBuildStrategy};
+
+use super::obstacle::{Obstacle, ObstacleImpulse};
+use crate::math::{Pose, Rotation, Vector};
+
+/// Above this many obstacles, candidates come from a bounding-volume tree
+/// instead of a linear scan.
+const BVH_THRESHOLD: usize = 8;
+
+/// The obstacles' motion over one step, and the momentum the cloth gave them.
+#[derive(Debug, Default)]
+pub(crate) struct ObstacleTracks {
+    aabbs: Vec<Aabb>,
+    /// Poses at the current substep.
+    pub(super) poses: Vec<Pose>,
+    /// Poses at the previous substep.
+    pub(super) prev_poses: Vec<Pose>,
+    /// Per dynamic obstacle: centre of mass, its velocity, the angular
+    /// velocity, and the impulses already turned into velocity.
+    com: Vec<Vector>,
+    com_velocity: Vec<Vector>,
+    angvel: Vec<Vector>,
+    applied: Vec<ObstacleImpulse>,
+    bvh: Option<Bvh>,
+    /// Obstacles found by the last [`ObstacleTracks::gather`].
+    pub(super) candidates: Vec<u32>,
+    /// How far (m) beyond an obstacle a particle or a sampled spring can still meet it.
+    pub(super) reach: f32,
+    /// Momentum handed to each obstacle during the current step.
+    pub(super) impulses: Vec<ObstacleImpulse>,
+}
+
+impl ObstacleTracks {
+    /// Prepares a step of `dt` seconds: bounds swept over the step, grown by
+    /// `reach` metres (the thickness plus the longest sampled spring).
+    pub fn begin_step(&mut self, obstacles: &[Obstacle], dt: f32, reach: f32) {
+        self.reach = reach;
+        self.aabbs.clear();
+        self.aabbs
+            .extend(obstacles.iter().map(|o| o.swept_aabb(dt).loosened(reach)));
+        self.bvh = (obstacles.len() > BVH_THRESHOLD)
+            .then(|| Bvh::from_leaves(BvhBuildStrategy::Binned, &self.aabbs));
+        self.impulses.clear();
+        self.impulses
+            .resize(obstacles.len(), ObstacleImpulse::default());
+        self.applied.clear();
+        self.applied
+            .resize(obstacles.len(), ObstacleImpulse::default());
+        self.poses.clear();
+        self.poses.extend(obstacles.iter().map(|o| o.pose));
+        self.com.clear();
+        self.com_velocity.clear();
+        self.angvel.clear();
+        for o in obstacles {
+            let com = o.body.map_or(o.pose.translation, |b| b.center_of_mass);
+            self.com.push(com);
+            self.com_velocity
+                .push(o.linvel + o.angvel.cross(com - o.pose.translation));
+            self.angvel.push(o.angvel);
+        }
+    }
+
+    /// Obstacle candidates whose bounds contain `point`, into `self.candidates`.
+    pub(super) fn gather(&mut self, point: Vector) {
+        self.gather_box(Aabb::new(point, point));
+    }
+
+    /// Obstacle candidates whose bounds meet `region`, into `self.candidates`.
+    pub(super) fn gather_box(&mut self, region: Aabb) {
+        self.candidates.clear();
+        match &self.bvh {
+            Some(bvh) => self.candidates.extend(bvh.intersect_aabb(&region)),
+            None => self.candidates.extend(
+                self.aabbs
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, b)| b.intersects(&region))
+                    .map(|(o, _)| o as u32),
+            ),
+        }
+    }
+
+    /// Records momentum `j` (N·s) handed to obstacle `o` at `point`.
+    pub fn add_impulse(&mut self, o: usize, point: Vector, j: Vector) {
+        if let Some(imp) = self.impulses.get_mut(o) {
+            imp.linear += j;
+            imp.angular_about_origin += point.cross(j);
+        }
+    }
+
+    /// Momentum handed to each obstacle during the current step.
+    pub fn impulses(&self) -> &[ObstacleImpulse] {
+        &self.impulses
+    }
+
+    /// Moves the obstacles to where they are `t` seconds into the step,
+    /// before a substep of `h` seconds.
+    pub fn advance_to(&mut self, obstacles: &[Obstacle], t: f32, h: f32) {
+        self.prev_poses.clear();
+        self.prev_poses.extend_from_slice(&self.poses);
+        for (o, obstacle) in obstacles.iter().enumerate() {
+            let Some(body) = &obstacle.body else {
+                self.poses[o] = obstacle.pose_at(t);
+                continue;
+            };
+            // A dynamic body: the cloth's push since the last substep changes
+            // its velocity, then it moves on by one substep.
+            let done = self.applied[o];
+            let now = self.impulses[o];
+            let dj = now.linear - done.linear;
+            let dtau =
+                (now.angular_about_origin - done.angular_about_origin) - self.com[o].cross(dj);
+            self.applied[o] = now;
+            self.com_velocity[o] += dj * body.inverse_mass + body.acceleration * h;
+            self.angvel[o] += body.inverse_inertia * dtau;
+            let spin = Rotation::from_scaled_axis(self.angvel[o] * h);
+            let pose = &mut self.poses[o];
+            let arm = pose.translation - self.com[o];
+            self.com[o] += self.com_velocity[o] * h;
+            pose.translation = self.com[o] + spin * arm;
+            pose.rotation = (spin * pose.rotation).normalize();
+        }
+    }
+
+    /// Velocity of the material point of obstacle `o` at `point`, now.
+    pub(super) fn surface_velocity_of(
+        &self,
+        obstacles: &[Obstacle],
+        o: usize,
+        point: Vector,
+    ) -> Vector {
+        match obstacles[o].body {
+            Some(_) => self.com_velocity[o] + self.angvel[o].cross(point - self.com[o]),
+            None => obstacles[o].velocity_at(&self.poses[o], point),
+        }
+    }
+}

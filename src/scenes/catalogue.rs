@@ -1,0 +1,260 @@
+//! The catalogue of canonical scenes (docs/SCENES.md): their names, what a
+//! user sees in each, and the description each is built from.
+
+use serde::{Deserialize, Serialize};
+
+use super::desc::{
+    BodyDesc, BodyKind, ClothDesc, MaterialDesc, ObstacleDesc, PinsDesc, Placement, SceneDesc,
+    ShapeDesc, Waypoint,
+};
+use super::error::SceneError;
+use super::options::SceneOptions;
+use crate::cloth::{Material, PinPreset, Wind};
+use crate::error::ClothError;
+use crate::math::Vector;
+use crate::solver::{Integrator, Substeps};
+
+/// The canonical scenes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum SceneKind {
+    /// An N×N tablecloth falling on a fixed ball.
+    Drape,
+    /// An N×N tablecloth falling on a fixed cube.
+    Box,
+    /// A 32×20 flag pinned along its pole, in the wind.
+    Flag,
+    /// A 33×33 horizontal cloth hanging from a pin figure.
+    Pins,
+    /// A 40×40 curtain on its rail pushed aside by a kinematic rapier ball.
+    Curtain,
+    /// A 32×32 hammock on its four corners catching three dynamic rapier boxes.
+    Hammock,
+}
+
+impl SceneKind {
+    /// Every scene.
+    pub const ALL: [SceneKind; 6] = [
+        SceneKind::Drape,
+        SceneKind::Box,
+        SceneKind::Flag,
+        SceneKind::Pins,
+        SceneKind::Curtain,
+        SceneKind::Hammock,
+    ];
+
+    /// The scene's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            SceneKind::Drape => "drape",
+            SceneKind::Box => "box",
+            SceneKind::Flag => "flag",
+            SceneKind::Pins => "pins",
+            SceneKind::Curtain => "curtain",
+            SceneKind::Hammock => "hammock",
+        }
+    }
+
+    /// One line saying what a user sees.
+    pub fn description(self) -> &'static str {
+        match self {
+            SceneKind::Drape => "a tablecloth falls on a ball and rests on top",
+            SceneKind::Box => "a tablecloth falls on a cube; nothing passes through its edges",
+            SceneKind::Flag => "a flag pinned to its pole flaps in the wind",
+            SceneKind::Pins => "a cloth hangs from a pinning figure (variants)",
+            SceneKind::Curtain => "a curtain is pushed aside by a moving kinematic rapier ball",
+            SceneKind::Hammock => "a hammock catches three dynamic rapier boxes (two-way coupling)",
+        }
+    }
+
+    /// Looks a scene up by name.
+    pub fn from_name(name: &str) -> Result<Self, ClothError> {
+        crate::error::by_name(&Self::ALL, Self::name, "scene", name)
+    }
+
+    /// The pin variants the scene accepts (empty when it takes none).
+    pub fn variants(self) -> &'static [PinPreset] {
+        match self {
+            SceneKind::Pins => &[
+                PinPreset::Center,
+                PinPreset::CenterRow,
+                PinPreset::FourCenter,
+                PinPreset::TwoCorners,
+                PinPreset::FourCorners,
+            ],
+            _ => &[],
+        }
+    }
+
+    /// Frames a run lasts by default (120, or 240 for `flag`).
+    pub fn default_frames(self) -> u32 {
+        match self {
+            SceneKind::Flag | SceneKind::Hammock => 240,
+            _ => 120,
+        }
+    }
+
+    /// Default grid (columns, rows).
+    pub fn default_grid(self) -> (usize, usize) {
+        match self {
+            SceneKind::Drape | SceneKind::Box => (64, 64),
+            SceneKind::Flag => (32, 20),
+            SceneKind::Pins => (33, 33),
+            SceneKind::Curtain => (40, 40),
+            SceneKind::Hammock => (32, 32),
+        }
+    }
+}
+
+impl std::str::FromStr for SceneKind {
+    type Err = ClothError;
+    fn from_str(s: &str) -> Result<Self, ClothError> {
+        Self::from_name(s)
+    }
+}
+
+/// Where the curtain's ball is (z, metres) `t` seconds into the scene.
+pub fn curtain_ball_z(t: f32) -> f32 {
+    (-1.0 + 2.0 * t).min(1.0)
+}
+
+impl SceneKind {
+    /// The scene's description with `options` applied: what [`Scene::build`]
+    /// builds and what `cloth3d export-scene` writes.
+    pub fn desc(self, options: &SceneOptions) -> Result<SceneDesc, SceneError> {
+        let variant = self.check_variant(options.variant)?;
+        let (cols, rows) = self.default_grid();
+        let horizontal = |y: f32| Placement::Horizontal {
+            center: Vector::new(0.0, y, 0.0),
+        };
+        let mut cloth = match self {
+            SceneKind::Drape | SceneKind::Box | SceneKind::Pins => {
+                ClothDesc::new(cols, rows, horizontal(0.6))
+            }
+            SceneKind::Flag => {
+                let mut c = ClothDesc::new(
+                    cols,
+                    rows,
+                    Placement::Vertical {
+                        center: Vector::new(0.8, 1.2, 0.0),
+                    },
+                );
+                c.size = (1.6, 1.0);
+                c
+            }
+            SceneKind::Curtain => ClothDesc::new(
+                cols,
+                rows,
+                Placement::Vertical {
+                    center: Vector::new(0.0, 1.0, 0.0),
+                },
+            ),
+            SceneKind::Hammock => {
+                let mut c = ClothDesc::new(cols, rows, horizontal(0.5));
+                // Hammock cotton is strongly damped along its threads (above
+                // a spring's critical damping at N = 32): with plain cotton's
+                // damping the boxes bob for many seconds.
+                let mut m = Material::cotton();
+                m.name = "damped cotton".into();
+                m.stretch.damping = 3.0;
+                m.shear.damping = 3.0;
+                c.material = MaterialDesc::Custom(m);
+                c
+            }
+        };
+        cloth.pins = PinsDesc::preset(match self {
+            SceneKind::Flag => PinPreset::FlagColumn,
+            SceneKind::Pins => variant.unwrap_or(PinPreset::Center),
+            SceneKind::Curtain => PinPreset::CurtainRow,
+            SceneKind::Hammock => PinPreset::FourCorners,
+            _ => PinPreset::None,
+        });
+        let mut desc = SceneDesc::new(self.name(), cloth);
+        desc.description = self.description().to_string();
+        desc.frames = self.default_frames();
+        if self == SceneKind::Hammock {
+            // Strong damping is what the implicit integrator is for; four
+            // substeps keep the boxes' landing from stretching the cloth
+            // through them (the boxes' contacts are not constraints of its solve).
+            desc.solver.integrator = Integrator::ImplicitEuler;
+            desc.solver.substeps = Substeps::Fixed(4);
+        }
+        match self {
+            SceneKind::Drape => desc.obstacles.push(ObstacleDesc::fixed(
+                ShapeDesc::Ball { radius: 0.3 },
+                Vector::ZERO,
+            )),
+            SceneKind::Box => desc.obstacles.push(ObstacleDesc::fixed(
+                ShapeDesc::Cuboid {
+                    half_extents: Vector::splat(0.25),
+                },
+                Vector::ZERO,
+            )),
+            SceneKind::Flag => desc.wind = Wind::new(Vector::new(1.0, 0.0, 0.3), 8.0),
+            SceneKind::Pins => {}
+            SceneKind::Curtain => {
+                let mut ball = BodyDesc::new(
+                    BodyKind::Kinematic,
+                    ShapeDesc::Ball { radius: 0.2 },
+                    Vector::new(0.0, 0.9, curtain_ball_z(0.0)),
+                );
+                ball.path = vec![
+                    Waypoint {
+                        time: 0.0,
+                        translation: Vector::new(0.0, 0.9, curtain_ball_z(0.0)),
+                    },
+                    Waypoint {
+                        time: 1.0,
+                        translation: Vector::new(0.0, 0.9, curtain_ball_z(1.0)),
+                    },
+                ];
+                desc.bodies.push(ball);
+            }
+            SceneKind::Hammock => {
+                desc.bodies.push(BodyDesc::new(
+                    BodyKind::Fixed,
+                    ShapeDesc::Cuboid {
+                        half_extents: Vector::new(3.0, 0.5, 3.0),
+                    },
+                    Vector::new(0.0, -0.5, 0.0),
+                ));
+                for x in [-0.25f32, 0.0, 0.25] {
+                    let mut b = BodyDesc::new(
+                        BodyKind::Dynamic,
+                        ShapeDesc::Cuboid {
+                            half_extents: Vector::splat(0.1),
+                        },
+                        Vector::new(x, 1.0, 0.0),
+                    );
+                    b.mass = Some(0.5);
+                    desc.bodies.push(b);
+                }
+            }
+        }
+        desc.apply(&SceneOptions {
+            variant: None,
+            ..options.clone()
+        })?;
+        Ok(desc)
+    }
+
+    fn check_variant(self, variant: Option<PinPreset>) -> Result<Option<PinPreset>, ClothError> {
+        match (self.variants(), variant) {
+            ([], None) => Ok(None),
+            ([], Some(v)) => Err(ClothError::UnknownName {
+                what: "variant",
+                name: v.name().to_string(),
+                valid: format!("none (the {} scene has no variants)", self.name()),
+            }),
+            (allowed, Some(v)) if !allowed.contains(&v) => Err(ClothError::UnknownName {
+                what: "variant",
+                name: v.name().to_string(),
+                valid: allowed
+                    .iter()
+                    .map(|p| p.name())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            }),
+            (allowed, v) => Ok(Some(v.unwrap_or(allowed[0]))),
+        }
+    }
+}

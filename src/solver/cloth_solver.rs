@@ -1,0 +1,105 @@
+//! The solver of a cloth: its settings, the state it carries between steps,
+//! its scratch and its counters. It steps any cloth it is handed (see
+//! `schedule.rs` for the order of a step), as rapier's `PhysicsPipeline`
+//! steps the sets passed to it.
+
+use serde::{Deserialize, Serialize};
+
+use super::integrator::Integrator;
+use super::report::SolverCounters;
+use super::settings::SolverSettings;
+use super::stability::stable_substeps;
+use super::state::SolverState;
+use super::substeps::Substeps;
+use super::workspace::Workspace;
+use crate::cloth::Cloth;
+use crate::collision::ObstacleImpulse;
+
+/// Steps a [`Cloth`] with the integrator and settings it holds.
+///
+/// A snapshot of a simulation is the cloth and its solver: both serialise
+/// (the solver its settings and [`SolverState`], not its scratch), and a
+/// restored pair continues bit for bit. Cloning gives a solver with the same
+/// settings and state and fresh scratch.
+#[derive(Debug, Default, Serialize, Deserialize)]
+pub struct ClothSolver {
+    /// How to step: integrator, substeps, iterations.
+    pub settings: SolverSettings,
+    /// What the solver carries from one step to the next.
+    #[serde(default)]
+    pub(crate) state: SolverState,
+    #[serde(skip)]
+    pub(crate) workspace: Workspace,
+    #[serde(skip)]
+    pub(crate) steps: u64,
+}
+
+impl Clone for ClothSolver {
+    fn clone(&self) -> Self {
+        ClothSolver {
+            settings: self.settings.clone(),
+            state: self.state.clone(),
+            workspace: Workspace::default(),
+            steps: self.steps,
+        }
+    }
+}
+
+impl PartialEq for ClothSolver {
+    fn eq(&self, other: &Self) -> bool {
+        self.settings == other.settings && self.state == other.state
+    }
+}
+
+impl ClothSolver {
+    /// A solver with these settings.
+    pub fn new(settings: SolverSettings) -> Self {
+        ClothSolver {
+            settings,
+            ..Default::default()
+        }
+    }
+
+    /// A solver with the default settings for `integrator` (its default substeps).
+    pub fn with_integrator(integrator: Integrator) -> Self {
+        Self::new(SolverSettings::for_integrator(integrator))
+    }
+
+    /// The integrator.
+    pub fn integrator(&self) -> Integrator {
+        self.settings.integrator
+    }
+
+    /// Switches the integrator (the substeps setting stays); the cloth keeps its state.
+    pub fn set_integrator(&mut self, integrator: Integrator) {
+        self.settings.integrator = integrator;
+    }
+
+    /// The state the solver carries between steps.
+    pub fn state(&self) -> &SolverState {
+        &self.state
+    }
+
+    /// The number of substeps a frame step of `dt` seconds takes on `cloth`.
+    pub fn substeps_for(&self, cloth: &Cloth, dt: f32) -> u32 {
+        match self.settings.substeps {
+            Substeps::Fixed(k) => k.max(1),
+            Substeps::Auto => stable_substeps(cloth, self.settings.integrator, dt),
+        }
+    }
+
+    /// Momentum the cloth gave each obstacle during the last step (same order
+    /// as the obstacles passed to [`ClothSolver::step`]).
+    pub fn obstacle_impulses(&self) -> &[ObstacleImpulse] {
+        self.workspace.collision.impulses()
+    }
+
+    /// What the solver has done since it was made (or cloned).
+    pub fn counters(&self) -> SolverCounters {
+        SolverCounters {
+            steps: self.steps,
+            factorizations: self.workspace.fms.factorizations,
+            refactorizations: self.workspace.fms.refactorizations,
+        }
+    }
+}

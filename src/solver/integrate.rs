@@ -1,0 +1,75 @@
+//! The integrate stage: one substep of the chosen method.
+
+use super::fast_mass_spring;
+use super::implicit_euler;
+use super::integrator::Integrator;
+use super::state::SolverState;
+use super::substep::Substep;
+use super::workspace::Workspace;
+use super::{explicit_euler, rk4, symplectic_euler, verlet};
+use crate::collision::FrictionPolicy;
+use crate::error::ClothError;
+use crate::math::Vector;
+
+/// What an integrator hands back with its substep.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SubstepOutcome {
+    /// Solver iterations it took (0 for the explicit methods).
+    pub iterations: u32,
+    /// Who applies Coulomb friction to this substep's contacts.
+    pub friction: FrictionPolicy,
+}
+
+/// Advances positions `x` and velocities `v` by one substep with the
+/// settings' integrator. Contacts are the collision stage's: the methods
+/// that solve them read them and record the impulses they gave.
+pub(crate) fn integrate(
+    sub: &Substep,
+    x: &mut [Vector],
+    v: &mut [Vector],
+    state: &mut SolverState,
+    ws: &mut Workspace,
+) -> Result<SubstepOutcome, ClothError> {
+    let (model, h) = (&sub.model, sub.ctx.h);
+    let explicit = |iterations| SubstepOutcome {
+        iterations,
+        friction: FrictionPolicy::Apply,
+    };
+    let solved = |iterations| SubstepOutcome {
+        iterations,
+        friction: FrictionPolicy::AlreadySolved,
+    };
+    Ok(match sub.settings.integrator {
+        Integrator::ExplicitEuler => {
+            explicit_euler::step(model, x, v, &mut ws.explicit, h);
+            explicit(0)
+        }
+        Integrator::SymplecticEuler => {
+            symplectic_euler::step(model, x, v, &mut ws.explicit, h);
+            explicit(0)
+        }
+        Integrator::Verlet => {
+            verlet::step(model, x, v, &mut ws.explicit, h);
+            explicit(0)
+        }
+        Integrator::Rk4 => {
+            rk4::step(model, x, v, &mut ws.explicit, h);
+            explicit(0)
+        }
+        Integrator::ImplicitEuler => solved(implicit_euler::step(
+            sub,
+            x,
+            v,
+            &mut ws.implicit,
+            &mut ws.collision,
+        )),
+        Integrator::FastMassSpring => solved(fast_mass_spring::step(
+            sub,
+            x,
+            v,
+            &mut ws.fms,
+            &mut state.held_force,
+            &mut ws.collision,
+        )?),
+    })
+}

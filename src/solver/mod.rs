@@ -1,0 +1,36 @@
+//! The solver: what steps a cloth. Its settings, the state it carries
+//! between steps, its scratch, its counters, the step schedule
+//! (`schedule.rs`: the stages of a step in one readable order) and the
+//! integrators, one file per method.
+
+mod cloth_solver;
+mod explicit_euler;
+mod fast_mass_spring;
+mod filter;
+mod global_matrix;
+mod implicit_euler;
+mod integrate;
+mod integrator;
+mod ordering;
+mod preconditioner;
+mod report;
+mod rk4;
+mod schedule;
+mod settings;
+mod spring_space;
+mod stability;
+mod state;
+mod substep;
+mod substeps;
+mod symplectic_euler;
+mod verlet;
+mod workspace;
+
+pub use cloth_solver::ClothSolver;
+pub use integrator::Integrator;
+pub use preconditioner::Preconditioner;
+pub use report::{SolverCounters, StepReport, MAX_DISTANCE, MAX_SPEED, MAX_STRAIN};
+pub use settings::SolverSettings;
+pub use stability::{stable_substep, stable_substeps, stiffness_bounds};
+pub use state::SolverState;
+pub use substeps::Substeps;

@@ -1,0 +1,37 @@
+//! What a step did, what a solver counted, and when a step has diverged.
+
+use serde::{Deserialize, Serialize};
+
+/// Speeds (m/s) and distances from the origin (m) beyond which a step is
+/// taken to have exploded even if the numbers are still finite.
+pub const MAX_SPEED: f32 = 1.0e4;
+/// See [`MAX_SPEED`].
+pub const MAX_DISTANCE: f32 = 1.0e7;
+/// A stretch spring longer than `1 + MAX_STRAIN` times its rest length after a
+/// step means the step exploded: no cloth stretches to eleven times its length.
+pub const MAX_STRAIN: f32 = 10.0;
+
+/// What a step did.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct StepReport {
+    /// Substeps taken.
+    pub substeps: u32,
+    /// Solver iterations over the whole step (0 for explicit integrators).
+    pub iterations: u32,
+    /// Particle–obstacle contacts resolved, summed over substeps.
+    pub contacts: u32,
+}
+
+/// What a solver has done since it was made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct SolverCounters {
+    /// Steps taken (diverged ones not counted).
+    pub steps: u64,
+    /// Cholesky factors the fast mass-spring solver computed from scratch
+    /// (ordering, symbolic and numeric): once, then again only when pins,
+    /// masses, the substep or the stiffness change.
+    pub factorizations: u64,
+    /// Numeric refactorisations of that factor (same ordering and pattern)
+    /// for a new set of particles held by friction on an obstacle.
+    pub refactorizations: u64,
+}

@@ -1,0 +1,165 @@
+//! The step schedule: the stages of one step, in the one order they run.
+//!
+//! ```text
+//! validate → substeps k, h = dt / k → back up → obstacle bounds over the step
+//! per substep:  obstacle motion → contact detection (solvers that solve
+//!               contacts) → integrate → resolve contacts (with the friction
+//!               policy the integrator handed back)
+//! divergence check → roll back and report, or commit the time
+//! ```
+
+use super::cloth_solver::ClothSolver;
+use super::integrate::integrate;
+use super::report::{StepReport, MAX_DISTANCE, MAX_SPEED, MAX_STRAIN};
+use super::stability::stable_substeps;
+use super::substep::Substep;
+use crate::cloth::{Cloth, Particles, SpringKind};
+use crate::collision::Obstacle;
+use crate::context::StepContext;
+use crate::error::{positive, ClothError};
+use crate::forces::{ForceModel, Masses};
+use crate::math::Vector;
+
+impl ClothSolver {
+    /// Advances `cloth` by `dt` seconds among `obstacles`.
+    ///
+    /// The step is split into substeps; each moves the obstacles, integrates
+    /// the forces with the current integrator and then resolves contacts. If
+    /// the new state is not finite, or has exploded (a speed over
+    /// [`MAX_SPEED`], a distance over [`MAX_DISTANCE`], a stretch over
+    /// [`MAX_STRAIN`]), the cloth is put back as it was before the step and
+    /// [`ClothError::Diverged`] says which integrator diverged and how many
+    /// substeps would be stable.
+    pub fn step(
+        &mut self,
+        cloth: &mut Cloth,
+        dt: f32,
+        obstacles: &[Obstacle],
+    ) -> Result<StepReport, ClothError> {
+        positive("dt", dt)?;
+        self.settings.validate()?;
+        cloth.params.validate()?;
+        cloth.material.validate()?;
+        for (i, o) in obstacles.iter().enumerate() {
+            o.validate(i)?;
+        }
+        let k = self.substeps_for(cloth, dt);
+        let h = dt / k as f32;
+        let n = cloth.particle_count();
+        let ws = &mut self.workspace;
+        ws.resize(n);
+        ws.backup_x.copy_from_slice(&cloth.particles.x);
+        ws.backup_v.copy_from_slice(&cloth.particles.v);
+        ws.backup_prev.copy_from_slice(&cloth.particles.x_prev);
+        let edges = self.settings.edge_collisions;
+        let reach = cloth.params.thickness + if edges { max_rest_length(cloth) } else { 0.0 };
+        ws.collision.begin_step(obstacles, dt, reach, n);
+
+        let mut report = StepReport {
+            substeps: k,
+            ..Default::default()
+        };
+        for substep in 0..k {
+            let ctx = StepContext {
+                dt,
+                h,
+                substep,
+                substeps: k,
+                time: cloth.time,
+                gravity: cloth.params.gravity,
+                thickness: cloth.params.thickness,
+            };
+            // Obstacle motion: where the obstacles are at the end of the substep.
+            ws.collision.advance(&ctx, obstacles);
+            // Where the substep starts, for tracing particles into moving obstacles.
+            let p = &mut cloth.particles;
+            p.x_prev.copy_from_slice(&p.x);
+            // Contact detection, for the solvers that take contacts into their solve.
+            if self.settings.integrator.solves_contacts() {
+                ws.collision
+                    .detect_contacts(&ctx, &cloth.particles, obstacles);
+            }
+            // Integrate.
+            let Particles {
+                x,
+                v,
+                mass,
+                inv_mass,
+                ..
+            } = &mut cloth.particles;
+            let sub = Substep {
+                ctx: &ctx,
+                model: ForceModel::new(
+                    &cloth.topology,
+                    &cloth.material,
+                    Masses { mass, inv_mass },
+                    &cloth.params,
+                    self.settings.parallel,
+                ),
+                settings: &self.settings,
+                obstacles,
+                mass_revision: cloth.mass_revision,
+            };
+            let outcome = match integrate(&sub, x, v, &mut self.state, ws) {
+                Ok(outcome) => outcome,
+                Err(e) => {
+                    restore(cloth, ws);
+                    return Err(e);
+                }
+            };
+            report.iterations += outcome.iterations;
+            // Resolve contacts, by the friction policy the integrator handed back.
+            report.contacts += ws.collision.resolve(
+                &ctx,
+                &mut cloth.particles,
+                &cloth.topology.springs,
+                obstacles,
+                outcome.friction,
+                edges,
+            );
+        }
+        // Divergence check.
+        if !is_sane(cloth) {
+            let integrator = self.settings.integrator;
+            restore(cloth, &self.workspace);
+            let suggested = stable_substeps(cloth, integrator, dt).max(2 * k);
+            return Err(ClothError::Diverged {
+                integrator: integrator.name(),
+                dt,
+                substeps: k,
+                suggested_substeps: suggested,
+            });
+        }
+        cloth.time += dt as f64;
+        self.steps += 1;
+        Ok(report)
+    }
+}
+
+/// Puts the cloth back as it was at the start of the step.
+fn restore(cloth: &mut Cloth, ws: &super::workspace::Workspace) {
+    let p = &mut cloth.particles;
+    p.x.copy_from_slice(&ws.backup_x);
+    p.v.copy_from_slice(&ws.backup_v);
+    p.x_prev.copy_from_slice(&ws.backup_prev);
+}
+
+/// False when the cloth has exploded: a position or velocity that is not
+/// finite or too large, or a stretch spring over [`MAX_STRAIN`].
+fn is_sane(cloth: &Cloth) -> bool {
+    let ok_v = |v: &Vector| v.is_finite() && v.length_squared() < MAX_SPEED * MAX_SPEED;
+    let ok_x = |x: &Vector| x.is_finite() && x.length_squared() < MAX_DISTANCE * MAX_DISTANCE;
+    cloth.positions().iter().all(ok_x)
+        && cloth.velocities().iter().all(ok_v)
+        && cloth.max_strain(SpringKind::Stretch) < MAX_STRAIN
+}
+
+/// The longest rest length among the springs sampled by edge collisions.
+fn max_rest_length(cloth: &Cloth) -> f32 {
+    let springs = cloth.springs();
+    [SpringKind::Stretch, SpringKind::Shear]
+        .iter()
+        .flat_map(|&k| springs.range(k))
+        .map(|s| springs.rest[s])
+        .fold(0.0, f32::max)
+}

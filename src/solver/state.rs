@@ -1,0 +1,17 @@
+//! Solver state that changes results and so belongs in a snapshot: what the
+//! solver remembers from one step to the next.
+
+use serde::{Deserialize, Serialize};
+
+use crate::math::Vector;
+
+/// What a solver carries from one substep to the next.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct SolverState {
+    /// Per particle: the pull (in the fast mass-spring solver's units) with
+    /// which static friction held it on a surface in the last substep, zero
+    /// when not held; the next substep keeps the hold while it stays in the
+    /// friction cone. Empty until that solver runs.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub(crate) held_force: Vec<Vector>,
+}

@@ -1,0 +1,21 @@
+//! What every integrator reads during one substep, in one value.
+
+use crate::collision::Obstacle;
+use crate::context::StepContext;
+use crate::forces::ForceModel;
+
+use super::settings::SolverSettings;
+
+/// The read-only inputs of one substep of an integrator.
+pub(crate) struct Substep<'a> {
+    /// Where in the step, and the physical constants.
+    pub ctx: &'a StepContext,
+    /// Forces of the cloth (topology, material, masses, gravity, wind, drag).
+    pub model: ForceModel<'a>,
+    /// Iterations and tolerances.
+    pub settings: &'a SolverSettings,
+    /// The obstacles, at the poses the collision stage holds.
+    pub obstacles: &'a [Obstacle],
+    /// The cloth's masses and pins, for caches derived from them.
+    pub mass_revision: u64,
+}

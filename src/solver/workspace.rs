@@ -1,0 +1,55 @@
+//! A solver's scratch memory, kept between steps so that a warmed-up step
+//! allocates nothing; outside the cloth (as Jolt keeps its
+//! `SoftBodyUpdateContext` outside the body). Nothing here changes results:
+//! a solver with fresh scratch continues bit for bit.
+
+use super::fast_mass_spring::FastMassSpringState;
+use super::implicit_euler::ImplicitState;
+use crate::collision::CollisionStage;
+use crate::math::Vector;
+
+/// Buffers of the explicit integrators (accelerations and Runge–Kutta stages).
+#[derive(Debug, Default)]
+pub(crate) struct ExplicitScratch {
+    pub a: Vec<Vector>,
+    pub a2: Vec<Vector>,
+    pub xt: Vec<Vector>,
+    pub vt: Vec<Vector>,
+    pub sx: Vec<Vector>,
+    pub sv: Vec<Vector>,
+}
+
+/// Everything a solver keeps between steps that is not state.
+#[derive(Debug, Default)]
+pub(crate) struct Workspace {
+    /// Positions, velocities and previous positions at the start of the
+    /// step, to put the cloth back when the step diverges.
+    pub backup_x: Vec<Vector>,
+    pub backup_v: Vec<Vector>,
+    pub backup_prev: Vec<Vector>,
+    pub explicit: ExplicitScratch,
+    pub implicit: ImplicitState,
+    pub fms: FastMassSpringState,
+    /// The collision stage: obstacle motion, contacts, impulses.
+    pub collision: CollisionStage,
+}
+
+impl Workspace {
+    /// Makes sure every per-particle buffer holds `n` entries.
+    pub fn resize(&mut self, n: usize) {
+        let e = &mut self.explicit;
+        for buf in [
+            &mut e.a,
+            &mut e.a2,
+            &mut e.xt,
+            &mut e.vt,
+            &mut e.sx,
+            &mut e.sv,
+            &mut self.backup_x,
+            &mut self.backup_v,
+            &mut self.backup_prev,
+        ] {
+            buf.resize(n, Vector::ZERO);
+        }
+    }
+}
