@@ -1,25 +1,19 @@
-//! A flag on its pole in the wind: F = c A (n·d) n on every triangle.
+//! The catalogue's `flag` on its pole, in gusts: F = c A (n·d) n on every
+//! triangle, with the wind's strength breathing between 4 and 12 N/m².
 //!
 //! `cargo run --release --example flag`
 
-use cloth3d::prelude::*;
+use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
 
-fn main() -> Result<(), ClothError> {
-    let mut cloth = Simulation::new(
-        ClothBuilder::new(32, 20)
-            .size(1.6, 1.0)
-            .vertical(Vector::new(0.8, 1.5, 0.0))
-            .material(Material::silk())
-            .pins(PinPreset::FlagColumn)
-            .build()?,
-    );
-    cloth.params.wind = Wind::new(Vector::new(1.0, 0.0, 0.3), 8.0);
-    for frame in 1..=240 {
-        // Gusts: the wind strength breathes between 4 and 12 N/m².
-        cloth.params.wind.strength = 8.0 + 4.0 * (frame as f32 * 0.05).sin();
-        cloth.step(1.0 / 60.0, &[])?;
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut scene = Scene::build(SceneKind::Flag, &SceneOptions::default())?;
+    for frame in 1..=scene.frames {
+        scene.cloth.params.wind.strength = 8.0 + 4.0 * (frame as f32 * 0.05).sin();
+        scene.step_frame()?;
         if frame % 60 == 0 {
-            let tip = cloth.positions()[cloth.index(10, 31)?];
+            let cloth = &scene.cloth;
+            let grid = cloth.grid().ok_or("the flag is a grid")?;
+            let tip = cloth.positions()[cloth.index(grid.rows / 2, grid.cols - 1)?];
             println!(
                 "t = {:.0} s  flag tip at ({:+.2}, {:+.2}, {:+.2}) m",
                 cloth.time(),

@@ -301,3 +301,71 @@ fn bench_json_has_every_figure_and_plots_them() {
     assert!(coloured > 200, "the plot has {coloured} coloured pixels");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn export_scene_writes_the_solver_flags_and_run_uses_them() {
+    let dir = std::env::temp_dir().join(format!("cloth3d-export-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("x.ron");
+    let file = path.to_str().unwrap();
+    cloth3d_ok(&[
+        "export-scene",
+        "drape",
+        "--integrator",
+        "implicit-euler",
+        "--cg-iterations",
+        "50",
+        "--n",
+        "12",
+        "-o",
+        file,
+    ]);
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.contains("integrator: ImplicitEuler"), "{text}");
+    assert!(text.contains("cg_max_iterations: 50"), "{text}");
+    let stdout = cloth3d_ok(&["run", file, "--json", "--frames", "3"]);
+    let v: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    assert_eq!(v["integrator"], "implicit-euler", "{v}");
+    assert_eq!(v["solver"]["cg_max_iterations"], 50, "{v}");
+    assert_eq!(v["substeps"], 1, "{v}");
+    // Without the flag the file keeps the default.
+    cloth3d_ok(&["export-scene", "drape", "-o", file]);
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.contains("cg_max_iterations: 100"), "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn compare_honours_the_solver_flags() {
+    let dir = std::env::temp_dir().join(format!("cloth3d-compare-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let plot = dir.join("c.png");
+    let rows = |cg: &str| {
+        let stdout = cloth3d_ok(&[
+            "compare",
+            "drape",
+            "--n",
+            "12",
+            "--frames",
+            "20",
+            "--cg-iterations",
+            cg,
+            "--json",
+            "--plot",
+            plot.to_str().unwrap(),
+        ]);
+        json_lines(&stdout)
+            .into_iter()
+            .find(|r| r["integrator"] == "implicit-euler")
+            .unwrap()
+    };
+    // At most (2 Newton rounds + 4 contact rounds) × 1 CG iteration a frame.
+    let capped = rows("1");
+    assert!(capped["iterations"].as_u64().unwrap() <= 6, "{capped}");
+    let free = rows("100");
+    assert!(
+        free["iterations"].as_u64().unwrap() > capped["iterations"].as_u64().unwrap(),
+        "{free} vs {capped}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

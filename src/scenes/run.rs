@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::world::Scene;
 use crate::error::ClothError;
 use crate::metrics::max_stretch;
+use crate::solver::SolverSettings;
 
 /// The metrics of one run of a scene, as `cloth3d run --json` prints them.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -22,6 +23,9 @@ pub struct RunMetrics {
     pub grid: [usize; 2],
     /// Integrator name.
     pub integrator: String,
+    /// Every setting of the solver the run used (integrator, substeps,
+    /// iterations, tolerances).
+    pub solver: SolverSettings,
     /// Material name.
     pub material: String,
     /// Frame step, in seconds.
@@ -111,6 +115,7 @@ pub fn run_with(
         n: grid[0],
         grid,
         integrator: scene.solver.integrator().name().to_string(),
+        solver: scene.solver.settings.clone(),
         material: cloth.material.name.clone(),
         dt: scene.dt,
         substeps: max_substeps,
