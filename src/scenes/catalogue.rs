@@ -118,7 +118,7 @@ pub fn curtain_ball_z(t: f32) -> f32 {
 }
 
 impl SceneKind {
-    /// The scene's description with `options` applied: what [`Scene::build`]
+    /// The scene's description with `options` applied: what [`super::Scene::build`]
     /// builds and what `cloth3d export-scene` writes.
     pub fn desc(self, options: &SceneOptions) -> Result<SceneDesc, SceneError> {
         let variant = self.check_variant(options.variant)?;

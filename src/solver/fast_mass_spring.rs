@@ -118,7 +118,7 @@ pub(crate) fn step(
     force.resize(n, Vector::ZERO);
     held_force.resize(n, Vector::ZERO);
 
-    // How each contact found by `Collider::detect_contacts` responds: a
+    // How each contact found by `CollisionStage::detect_contacts` responds: a
     // particle held by static friction gets a stiff spring to where the
     // surface carries it; a sliding one gets the kinetic friction impulse and
     // is kept out by the projections.

@@ -1,0 +1,163 @@
+//! `cloth3d bench`: the scenes timed at several sizes, beside rapier's cloth.
+
+use std::process::ExitCode;
+
+use cloth3d::cli::args::{parse_count, parse_frames, parse_integrator, parse_n, parse_scene};
+use cloth3d::scenes::SceneKind;
+use cloth3d::solver::Integrator;
+
+use crate::output::emit;
+
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// Scenes to time (repeatable; rapier's cloth is compared on `drape`).
+    #[arg(long, value_parser = parse_scene, default_values = ["drape"])]
+    pub scene: Vec<SceneKind>,
+    /// Particles along a row (repeatable).
+    #[arg(long, value_parser = parse_n, default_values = ["32", "64", "128", "256"], allow_hyphen_values = true)]
+    pub n: Vec<usize>,
+    /// Integrators (repeatable).
+    #[arg(long, value_parser = parse_integrator, default_values = ["symplectic-euler", "implicit-euler", "fast-mass-spring"])]
+    pub integrator: Vec<Integrator>,
+    /// Frames run before timing (the cloth lands on the obstacle).
+    #[arg(long, value_parser = parse_count, default_value = "30", allow_hyphen_values = true)]
+    pub warmup: u32,
+    /// Frames timed (the median is reported).
+    #[arg(long, value_parser = parse_frames, default_value = "10", allow_hyphen_values = true)]
+    pub frames: u32,
+    /// Threads (only 1 until the parallel step lands).
+    #[arg(long, value_parser = parse_frames, default_value = "1", allow_hyphen_values = true)]
+    pub threads: u32,
+    /// Skip rapier's built-in cloth.
+    #[arg(long)]
+    pub no_rapier: bool,
+    /// One JSON object per line instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Draw wall time per frame against particle count to this PNG.
+    #[arg(long, value_name = "FILE.png")]
+    pub plot: Option<std::path::PathBuf>,
+}
+
+/// Above this N the fast mass-spring solver's Cholesky factor (and a
+/// frame of it, seconds at N = 256) grows too large for the bench.
+const FMS_MAX_N: usize = 256;
+
+/// Times the rows and prints them (a table, or JSON lines), with the targets.
+pub fn bench_command(args: BenchArgs) -> ExitCode {
+    #[cfg(not(feature = "parallel"))]
+    if args.threads != 1 {
+        eprintln!(
+            "error: --threads {}: this build is single-threaded; build with --features parallel",
+            args.threads
+        );
+        return ExitCode::from(2);
+    }
+    #[cfg(feature = "parallel")]
+    {
+        let pool = match rayon::ThreadPoolBuilder::new()
+            .num_threads(args.threads as usize)
+            .build()
+        {
+            Ok(pool) => pool,
+            Err(e) => {
+                eprintln!("error: cannot start {} threads: {e}", args.threads);
+                return ExitCode::from(2);
+            }
+        };
+        pool.install(|| bench_rows(&args))
+    }
+    #[cfg(not(feature = "parallel"))]
+    bench_rows(&args)
+}
+
+fn bench_rows(args: &BenchArgs) -> ExitCode {
+    use cloth3d::cli::bench::{bench_cloth3d, bench_rapier_drape, BenchRow};
+    if !args.json {
+        emit(&format!(
+            "{:<8} {:>5} {:<18} {:>8} {:>11} {:>14} {:>14} {:>9} {:>9} {:>9}\n",
+            "scene",
+            "n",
+            "integrator",
+            "substeps",
+            "ms/frame",
+            "part.sub/s",
+            "springs/s",
+            "stretch",
+            "penetr.",
+            "vs rapier"
+        ));
+    }
+    let mut rows = Vec::new();
+    let mut print = |row: &BenchRow| {
+        rows.push(row.clone());
+        if args.json {
+            emit(&format!(
+                "{}\n",
+                serde_json::to_string(row).unwrap_or_default()
+            ));
+        } else {
+            emit(&format!(
+                "{:<8} {:>5} {:<18} {:>8} {:>11.2} {:>14.3e} {:>14} {:>8.2}% {:>8.4} {:>9}\n",
+                row.scene,
+                row.n,
+                row.integrator,
+                row.substeps,
+                1000.0 * row.frame_wall_s,
+                row.particle_substeps_per_s,
+                row.spring_evals_per_s
+                    .map(|s| format!("{s:.3e}"))
+                    .unwrap_or_else(|| "-".into()),
+                100.0 * row.max_stretch,
+                row.max_penetration,
+                row.speedup_vs_rapier
+                    .map(|s| format!("{s:.2}x"))
+                    .unwrap_or_else(|| "-".into()),
+            ));
+        }
+    };
+    for &kind in &args.scene {
+        for &n in &args.n {
+            let rapier = (kind == SceneKind::Drape && !args.no_rapier)
+                .then(|| bench_rapier_drape(n, args.warmup, args.frames));
+            if let Some(row) = &rapier {
+                print(row);
+            }
+            for &integrator in &args.integrator {
+                if integrator == Integrator::FastMassSpring && n > FMS_MAX_N {
+                    if !args.json {
+                        emit(&format!("{:<8} {n:>5} {:<18} skipped: the Cholesky factor above N = {FMS_MAX_N} is too large\n", kind.name(), integrator.name()));
+                    }
+                    continue;
+                }
+                match bench_cloth3d(kind, n, integrator, args.warmup, args.frames) {
+                    Ok(mut row) => {
+                        row.speedup_vs_rapier = rapier
+                            .as_ref()
+                            .map(|r| r.frame_wall_s / row.frame_wall_s.max(1e-12));
+                        print(&row);
+                    }
+                    Err(e) => eprintln!("{} N={n} {}: {e}", kind.name(), integrator.name()),
+                }
+            }
+        }
+    }
+    if !args.json {
+        let lines = cloth3d::cli::bench::target_lines(&rows);
+        if !lines.is_empty() {
+            emit("\ntargets (issue 7):\n");
+            for line in lines {
+                emit(&format!("  {line}\n"));
+            }
+        }
+    }
+    if let Some(path) = &args.plot {
+        let written = cloth3d::cli::bench::plot(&rows, 900, 560)
+            .and_then(|img| img.save(path).map_err(|e| e.to_string()));
+        if let Err(e) = written {
+            eprintln!("error: {}: {e}", path.display());
+            return ExitCode::from(2);
+        }
+    }
+    ExitCode::SUCCESS
+}
