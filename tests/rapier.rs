@@ -157,7 +157,11 @@ fn momentum_is_exchanged_not_created() {
     // No gravity: a cloth thrown at a free dynamic ball. Whatever they do,
     // the total momentum stays, with an explicit integrator and with the
     // implicit one.
-    for integrator in [Integrator::SymplecticEuler, Integrator::ImplicitEuler] {
+    for integrator in [
+        Integrator::SymplecticEuler,
+        Integrator::ImplicitEuler,
+        Integrator::Xpbd,
+    ] {
         momentum_exchange(integrator);
     }
     one_way_coupling_pushes_nothing();

@@ -50,6 +50,9 @@ pub struct SceneArgs {
     /// Local/global iterations per substep (fast-mass-spring).
     #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
     pub fms_iterations: Option<u32>,
+    /// Spring sweeps per substep (xpbd).
+    #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
+    pub xpbd_iterations: Option<u32>,
 }
 
 impl SceneArgs {
@@ -70,6 +73,7 @@ impl SceneArgs {
                 cg_tolerance: self.cg_tolerance,
                 preconditioner: self.preconditioner,
                 fms_iterations: self.fms_iterations,
+                xpbd_iterations: self.xpbd_iterations,
                 edge_collisions: None,
             },
         }

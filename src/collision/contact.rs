@@ -2,7 +2,7 @@
 
 use parry3d::shape::Shape;
 
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 
 use crate::math::{Pose, Vector};
 
@@ -33,13 +33,13 @@ const ON_SURFACE: f32 = 1.0e-6;
 /// centre is pushed out along `+y`; a point exactly on an edge or corner gets
 /// the feature's normal (or the direction from the shape's centre).
 pub fn contact(shape: &dyn Shape, pose: &Pose, point: Vector) -> Option<Contact> {
-    let local = pose.inverse_transform_point(point);
     if let Some(ball) = shape.as_ball() {
         return ball_contact(ball.radius, pose, point);
     }
     if let Some(cuboid) = shape.as_cuboid() {
         return cuboid_contact(cuboid.half_extents, pose, point);
     }
+    let local = pose.inverse_transform_point(point);
     let proj = shape.project_local_point(local, false);
     let (surface, normal, signed) = if proj.point.is_finite() {
         let offset = local - proj.point;
@@ -73,17 +73,17 @@ pub fn contact(shape: &dyn Shape, pose: &Pose, point: Vector) -> Option<Contact>
 
 /// The query point in the shape's frame, in double precision, so that the
 /// normal stays exact even a hair away from the surface.
-fn local_f64(pose: &Pose, point: Vector) -> DVec3 {
-    pose.rotation
-        .as_dquat()
-        .normalize()
+/// Also returns the pose's rotation in double precision, for [`to_world`].
+fn local_f64(pose: &Pose, point: Vector) -> (DVec3, DQuat) {
+    let q = pose.rotation.as_dquat().normalize();
+    let local = q
         .inverse()
-        .mul_vec3(point.as_dvec3() - pose.translation.as_dvec3())
+        .mul_vec3(point.as_dvec3() - pose.translation.as_dvec3());
+    (local, q)
 }
 
-/// Back to world coordinates, in single precision.
-fn to_world(pose: &Pose, point: DVec3, normal: DVec3, signed: f64) -> Option<Contact> {
-    let q = pose.rotation.as_dquat().normalize();
+/// Back to world coordinates (`q`: the pose's rotation from [`local_f64`]), in single precision.
+fn to_world(pose: &Pose, q: DQuat, point: DVec3, normal: DVec3, signed: f64) -> Option<Contact> {
     let contact = Contact {
         point: (q.mul_vec3(point) + pose.translation.as_dvec3()).as_vec3(),
         normal: q.mul_vec3(normal).as_vec3(),
@@ -95,7 +95,7 @@ fn to_world(pose: &Pose, point: DVec3, normal: DVec3, signed: f64) -> Option<Con
 
 /// A ball, analytically: `c + r (p - c)/|p - c|`; the centre pushes out along the world's up.
 fn ball_contact(radius: f32, pose: &Pose, point: Vector) -> Option<Contact> {
-    let local = local_f64(pose, point);
+    let (local, q) = local_f64(pose, point);
     let r = radius as f64;
     let dist = local.length();
     let normal = if dist > 1e-12 {
@@ -105,19 +105,19 @@ fn ball_contact(radius: f32, pose: &Pose, point: Vector) -> Option<Contact> {
             .as_dvec3()
             .normalize()
     };
-    to_world(pose, normal * r, normal, dist - r)
+    to_world(pose, q, normal * r, normal, dist - r)
 }
 
 /// A cuboid, analytically: the clamp of the point to the box when outside,
 /// the nearest face when inside.
 fn cuboid_contact(half: Vector, pose: &Pose, point: Vector) -> Option<Contact> {
-    let local = local_f64(pose, point);
+    let (local, q) = local_f64(pose, point);
     let h = half.as_dvec3();
     let clamped = local.clamp(-h, h);
     if clamped != local {
         let offset = local - clamped;
         let dist = offset.length();
-        return to_world(pose, clamped, offset / dist, dist);
+        return to_world(pose, q, clamped, offset / dist, dist);
     }
     let gaps = h - local.abs();
     let axis = if gaps.x <= gaps.y && gaps.x <= gaps.z {
@@ -132,7 +132,7 @@ fn cuboid_contact(half: Vector, pose: &Pose, point: Vector) -> Option<Contact> {
     normal[axis] = sign;
     let mut surface = local;
     surface[axis] = h[axis] * sign;
-    to_world(pose, surface, normal, -gaps[axis])
+    to_world(pose, q, surface, normal, -gaps[axis])
 }
 
 /// Outward normal at a local point lying on the surface.

@@ -222,6 +222,7 @@ impl CollisionStage {
             return 0;
         }
         let thickness = ctx.thickness;
+        let far = self.tracks.reach.max(thickness + CONTACT_SLACK);
         let mut contacts = 0;
         for i in 0..particles.len() {
             self.nearest[i] = NONE;
@@ -230,6 +231,12 @@ impl CollisionStage {
             let mut nearest_distance = f32::INFINITY;
             for c in 0..self.tracks.candidates.len() {
                 let o = self.tracks.candidates[c] as usize;
+                // Beyond the reach of the contact and the edge pass: as if
+                // it were not a candidate (the edge pass then takes the
+                // particle's distance to be the reach, less than it is).
+                if self.tracks.surely_beyond(o, particles.x[i], far) {
+                    continue;
+                }
                 let Some(hit) = self.particle_contact(particles, i, &obstacles[o], o) else {
                     continue;
                 };

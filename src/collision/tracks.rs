@@ -34,6 +34,9 @@ pub(crate) struct ObstacleTracks {
     pub(super) reach: f32,
     /// Momentum handed to each obstacle during the current step.
     pub(super) impulses: Vec<ObstacleImpulse>,
+    /// Per obstacle: the centre (in its own frame, m) and radius (m) of a
+    /// sphere around it, to tell cheaply that a point is far from it.
+    bounds: Vec<(Vector, f32)>,
 }
 
 impl ObstacleTracks {
@@ -54,6 +57,11 @@ impl ObstacleTracks {
             .resize(obstacles.len(), ObstacleImpulse::default());
         self.poses.clear();
         self.poses.extend(obstacles.iter().map(|o| o.pose));
+        self.bounds.clear();
+        self.bounds.extend(obstacles.iter().map(|o| {
+            let sphere = o.shape.compute_local_bounding_sphere();
+            (sphere.center, sphere.radius)
+        }));
         self.com.clear();
         self.com_velocity.clear();
         self.angvel.clear();
@@ -84,6 +92,15 @@ impl ObstacleTracks {
                     .map(|(o, _)| o as u32),
             ),
         }
+    }
+
+    /// True when `point` is surely more than `distance` metres from obstacle
+    /// `o` where it is now: outside a sphere around it by that much.
+    #[inline]
+    pub(super) fn surely_beyond(&self, o: usize, point: Vector, distance: f32) -> bool {
+        let (center, radius) = self.bounds[o];
+        let center = self.poses[o].transform_point(center);
+        (point - center).length_squared() > (radius + distance) * (radius + distance)
     }
 
     /// Records momentum `j` (N·s) handed to obstacle `o` at `point`.

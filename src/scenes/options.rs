@@ -44,6 +44,8 @@ pub struct SolverTuning {
     pub preconditioner: Option<Preconditioner>,
     /// Local/global iterations of the fast mass-spring solver.
     pub fms_iterations: Option<u32>,
+    /// Spring sweeps per substep of the small-steps (XPBD) solver.
+    pub xpbd_iterations: Option<u32>,
     /// Keep stretch and shear springs out of obstacles too.
     pub edge_collisions: Option<bool>,
 }
@@ -92,6 +94,9 @@ impl SceneDesc {
         }
         if let Some(it) = tuning.fms_iterations {
             settings.fms_iterations = it;
+        }
+        if let Some(it) = tuning.xpbd_iterations {
+            settings.xpbd_iterations = it;
         }
         if let Some(edges) = tuning.edge_collisions {
             settings.edge_collisions = edges;

@@ -6,7 +6,7 @@ use super::integrator::Integrator;
 use super::state::SolverState;
 use super::substep::Substep;
 use super::workspace::Workspace;
-use super::{explicit_euler, rk4, symplectic_euler, verlet};
+use super::{explicit_euler, rk4, symplectic_euler, verlet, xpbd};
 use crate::collision::FrictionPolicy;
 use crate::error::ClothError;
 use crate::math::Vector;
@@ -31,6 +31,7 @@ pub(crate) fn integrate(
     ws: &mut Workspace,
 ) -> Result<SubstepOutcome, ClothError> {
     let (model, h) = (&sub.model, sub.ctx.h);
+    // Friction by the collision stage after the substep.
     let explicit = |iterations| SubstepOutcome {
         iterations,
         friction: FrictionPolicy::Apply,
@@ -54,6 +55,10 @@ pub(crate) fn integrate(
         }
         Integrator::Rk4 => {
             rk4::step(model, x, v, &mut ws.explicit, h);
+            explicit(0)
+        }
+        Integrator::Xpbd => {
+            xpbd::step(sub, x, v, &mut ws.xpbd);
             explicit(0)
         }
         Integrator::ImplicitEuler => solved(implicit_euler::step(

@@ -8,6 +8,7 @@ mod explicit_euler;
 mod fast_mass_spring;
 mod filter;
 mod global_matrix;
+mod grid_sweep;
 mod implicit_euler;
 mod integrate;
 mod integrator;
@@ -25,6 +26,7 @@ mod substeps;
 mod symplectic_euler;
 mod verlet;
 mod workspace;
+mod xpbd;
 
 pub use cloth_solver::ClothSolver;
 pub use integrator::Integrator;

@@ -99,6 +99,7 @@ impl ClothSolver {
                 settings: &self.settings,
                 obstacles,
                 mass_revision: cloth.mass_revision,
+                grid: cloth.topology.grid,
             };
             let outcome = match integrate(&sub, x, v, &mut self.state, ws) {
                 Ok(outcome) => outcome,

@@ -37,6 +37,11 @@ pub struct SolverSettings {
     /// Local/global iterations of the fast mass-spring solver.
     #[serde(deserialize_with = "crate::error::de::at_least_one")]
     pub fms_iterations: u32,
+    /// Gauss–Seidel sweeps over the springs per substep of the small-steps
+    /// (XPBD) solver: more substeps converge better, more sweeps cost no
+    /// collision work.
+    #[serde(deserialize_with = "crate::error::de::at_least_one")]
+    pub xpbd_iterations: u32,
     /// Also keep stretch and shear springs (not only particles) out of obstacles,
     /// so cloth cannot cut through edges and corners.
     pub edge_collisions: bool,
@@ -55,6 +60,7 @@ impl Default for SolverSettings {
             cg_tolerance: 1e-4,
             preconditioner: Preconditioner::BlockJacobi,
             fms_iterations: 10,
+            xpbd_iterations: 2,
             edge_collisions: true,
             parallel: true,
         }
@@ -96,6 +102,7 @@ impl SolverSettings {
         at_least_one("cg iterations", self.cg_max_iterations)?;
         positive("cg tolerance", self.cg_tolerance)?;
         at_least_one("fast mass-spring iterations", self.fms_iterations)?;
+        at_least_one("xpbd iterations", self.xpbd_iterations)?;
         Ok(())
     }
 }

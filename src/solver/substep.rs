@@ -1,5 +1,6 @@
 //! What every integrator reads during one substep, in one value.
 
+use crate::cloth::Grid;
 use crate::collision::Obstacle;
 use crate::context::StepContext;
 use crate::forces::ForceModel;
@@ -18,4 +19,6 @@ pub(crate) struct Substep<'a> {
     pub obstacles: &'a [Obstacle],
     /// The cloth's masses and pins, for caches derived from them.
     pub mass_revision: u64,
+    /// The grid the cloth was built on, if any (for grid-specialised kernels).
+    pub grid: Option<Grid>,
 }

@@ -5,6 +5,7 @@
 
 use super::fast_mass_spring::FastMassSpringState;
 use super::implicit_euler::ImplicitState;
+use super::xpbd::XpbdScratch;
 use crate::collision::CollisionStage;
 use crate::math::Vector;
 
@@ -30,6 +31,7 @@ pub(crate) struct Workspace {
     pub explicit: ExplicitScratch,
     pub implicit: ImplicitState,
     pub fms: FastMassSpringState,
+    pub xpbd: XpbdScratch,
     /// The collision stage: obstacle motion, contacts, impulses.
     pub collision: CollisionStage,
 }

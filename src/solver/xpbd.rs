@@ -1,0 +1,156 @@
+//! Extended position-based dynamics in small steps (Macklin, Müller and
+//! Chentanez 2016, "XPBD"; Macklin et al. 2019, "Small steps in physics
+//! simulation"): the same springs as every other integrator, each a distance
+//! constraint with compliance `1/k` and damping `c`, solved by one
+//! colour-ordered Gauss–Seidel sweep per substep. Many cheap substeps beat
+//! few expensive ones: stiffness converges with the substep count, and
+//! every substep meets the obstacles (the collision stage runs after each).
+//!
+//! A substep of `h` seconds: predict `v += h (g − drag v + f_wind / m)`,
+//! `x += h v`; for each spring, `C = |x_b − x_a| − L`, `α = 1/(k h²)`,
+//! `γ = c/(k h)`, `Δλ = −(C + γ n·(Δx_b − Δx_a)) / ((1 + γ)(w_a + w_b) + α)`
+//! with `Δx` the motion since the substep's start, and `x_a −= w_a Δλ n`,
+//! `x_b += w_b Δλ n`; then `v = (x − x_start)/h`. A spring at rest length
+//! under a steady load ends where `k C` balances the load: the equilibrium
+//! of the force-based integrators.
+
+use crate::cloth::SpringKind;
+use crate::forces::add_wind_forces;
+use crate::math::Vector;
+
+use super::grid_sweep::{sweep, Compliance, GridPlan, Lanes};
+use super::substep::Substep;
+
+/// Scratch of the small-steps solver.
+#[derive(Debug, Default)]
+pub(crate) struct XpbdScratch {
+    /// Positions at the start of the substep.
+    start: Vec<Vector>,
+    /// Wind forces (N).
+    wind: Vec<Vector>,
+    /// The grid's springs as row passes, for a grid cloth.
+    plan: Option<GridPlan>,
+    /// Structure-of-arrays copies for the grid sweep.
+    lanes: Lanes,
+    /// Per spring: its multiplier over the substep's sweeps (the generic sweep).
+    lambda: Vec<f32>,
+}
+
+/// One substep: predict, one sweep over the springs, velocities from the motion.
+pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut XpbdScratch) {
+    let model = &sub.model;
+    let h = sub.ctx.h;
+    let n = x.len();
+    ws.start.clear();
+    ws.start.extend_from_slice(x);
+    let calm = model.wind.is_calm();
+    if !calm {
+        ws.wind.clear();
+        ws.wind.resize(n, Vector::ZERO);
+        add_wind_forces(model.triangles, &model.wind, x, &mut ws.wind);
+    }
+    // Predict: external forces, explicitly; pinned particles move with their velocity.
+    for i in 0..n {
+        let w = model.inv_mass[i];
+        if w != 0.0 {
+            let mut a = model.gravity - v[i] * model.air_drag;
+            if !calm {
+                a += ws.wind[i] * w;
+            }
+            v[i] += a * h;
+        }
+        x[i] += v[i] * h;
+    }
+    let h2 = h * h;
+    let compliance = model.spring_params.map(|p| Compliance {
+        alpha: 1.0 / (p.stiffness * h2),
+        gamma: p.damping / (p.stiffness * h),
+    });
+    if let Some(grid) = sub.grid {
+        if !ws
+            .plan
+            .as_ref()
+            .is_some_and(|p| p.fits(grid, model.springs.len()))
+        {
+            ws.plan = GridPlan::new(grid, model.springs);
+        }
+    }
+    match (&mut ws.plan, sub.grid) {
+        (Some(plan), Some(_)) => {
+            plan.reset();
+            let l = &mut ws.lanes;
+            for (buf, value) in [
+                (&mut l.x, 0usize),
+                (&mut l.y, 1),
+                (&mut l.z, 2),
+                (&mut l.sx, 3),
+                (&mut l.sy, 4),
+                (&mut l.sz, 5),
+            ] {
+                buf.clear();
+                let from = if value < 3 { &*x } else { &ws.start[..] };
+                buf.extend(from.iter().map(|p| p[value % 3]));
+            }
+            l.w.clear();
+            l.w.extend_from_slice(model.inv_mass);
+            for _ in 0..sub.settings.xpbd_iterations {
+                sweep(plan, l, &compliance);
+            }
+            for i in 0..n {
+                x[i] = Vector::new(l.x[i], l.y[i], l.z[i]);
+            }
+        }
+        _ => {
+            ws.lambda.clear();
+            ws.lambda.resize(model.springs.len(), 0.0);
+            for _ in 0..sub.settings.xpbd_iterations {
+                sweep_colour_classes(sub, x, &ws.start, &mut ws.lambda, &compliance);
+            }
+        }
+    }
+    // Velocities from the motion.
+    let start = &ws.start[..];
+    let inv_h = 1.0 / h;
+    for i in 0..n {
+        if model.inv_mass[i] != 0.0 {
+            v[i] = (x[i] - start[i]) * inv_h;
+        }
+    }
+}
+
+/// One Gauss–Seidel sweep over any springs, colour class by colour class.
+fn sweep_colour_classes(
+    sub: &Substep,
+    x: &mut [Vector],
+    start: &[Vector],
+    lambda: &mut [f32],
+    compliance: &[Compliance; 3],
+) {
+    let model = &sub.model;
+    let springs = model.springs;
+    let (sa, sb, rest) = (&springs.a[..], &springs.b[..], &springs.rest[..]);
+    for kind in SpringKind::ALL {
+        let Compliance { alpha, gamma } = compliance[kind.index()];
+        for s in springs.range(kind) {
+            let (i, j) = (sa[s] as usize, sb[s] as usize);
+            let (wi, wj) = (model.inv_mass[i], model.inv_mass[j]);
+            let w = wi + wj;
+            if w == 0.0 {
+                continue;
+            }
+            let d = x[j] - x[i];
+            let len2 = d.length_squared();
+            if len2 <= f32::MIN_POSITIVE {
+                continue;
+            }
+            let inv_len = len2.sqrt().recip();
+            let dir = d * inv_len;
+            let c = len2 * inv_len - rest[s];
+            let rate = dir.dot((x[j] - start[j]) - (x[i] - start[i]));
+            let dl = -(c + alpha * lambda[s] + gamma * rate) / ((1.0 + gamma) * w + alpha);
+            lambda[s] += dl;
+            x[i] -= dir * (wi * dl);
+            x[j] += dir * (wj * dl);
+        }
+    }
+}

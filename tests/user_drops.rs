@@ -1,0 +1,149 @@
+//! What a user tries first, with a real rapier pipeline (`PhysicsWorld`
+//! steps rapier's `PhysicsPipeline`): a heavy ball dropped on a pinned
+//! sheet, small boxes dropped on a sheet, a tablecloth dropped on a table,
+//! for the integrators that run at game steps by default.
+
+use cloth3d::prelude::*;
+use cloth3d::rapier::RapierCoupling;
+use rapier3d::prelude::*;
+
+/// The integrators checked here: the small-steps solver and the symplectic
+/// reference, each at its default (automatic) substeps.
+const INTEGRATORS: [Integrator; 2] = [Integrator::SymplecticEuler, Integrator::Xpbd];
+
+/// A sheet `n`×`n`, 1 × 1 m, at height `y`, of `material`, pinned by `pins`.
+fn sheet(
+    n: usize,
+    y: f32,
+    material: Material,
+    pins: PinPreset,
+    integrator: Integrator,
+) -> Simulation {
+    Simulation::new(
+        ClothBuilder::new(n, n)
+            .horizontal(Vector::new(0.0, y, 0.0))
+            .material(material)
+            .pins(pins)
+            .build()
+            .unwrap(),
+    )
+    .with_integrator(integrator)
+}
+
+/// Steps cloth then rapier for `frames` frames.
+fn run(sim: &mut Simulation, world: &mut PhysicsWorld, frames: usize) {
+    let mut coupling = RapierCoupling::new();
+    for _ in 0..frames {
+        coupling.step_world(sim, world).unwrap();
+        world.step();
+    }
+}
+
+#[test]
+fn a_heavy_ball_dropped_on_a_pinned_sheet_is_caught() {
+    for integrator in INTEGRATORS {
+        let mut world = PhysicsWorld::new();
+        // 2 kg: a ball of radius 0.1 m at density 477 kg/m³.
+        let (ball, _) = world.insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 1.5, 0.0)),
+            ColliderBuilder::ball(0.1).mass(2.0),
+        );
+        let mut sim = sheet(
+            32,
+            0.5,
+            Material::denim(),
+            PinPreset::FourCorners,
+            integrator,
+        );
+        run(&mut sim, &mut world, 300);
+        let body = &world.bodies[ball];
+        let lowest = sim.positions().iter().map(|p| p.y).fold(f32::MAX, f32::min);
+        assert!(
+            body.translation().y > lowest,
+            "{integrator}: the ball at y = {} fell through the sheet (lowest {lowest})",
+            body.translation().y
+        );
+        assert!(body.translation().y > -0.5, "{integrator}: far below");
+        // Caught, it bobs: along-spring damping barely touches the sheet's
+        // slow mode, so with denim's own damping the ball still moves at
+        // 0.1-0.2 m/s after 5 s with either integrator (README, known limits).
+        assert!(sim.is_finite());
+    }
+}
+
+#[test]
+fn small_boxes_dropped_on_a_sheet_stay_on_it() {
+    for integrator in INTEGRATORS {
+        let mut world = PhysicsWorld::new();
+        world.insert(
+            RigidBodyBuilder::fixed().translation(Vector::new(0.0, -0.5, 0.0)),
+            ColliderBuilder::cuboid(3.0, 0.5, 3.0),
+        );
+        let boxes: Vec<_> = (0..5)
+            .map(|k| {
+                let x = -0.3 + 0.15 * k as f32;
+                world
+                    .insert(
+                        RigidBodyBuilder::dynamic().translation(Vector::new(x, 1.0, 0.0)),
+                        ColliderBuilder::cuboid(0.04, 0.04, 0.04).density(500.0),
+                    )
+                    .0
+            })
+            .collect();
+        // Canvas pinned along two opposite edges, 0.6 m above the ground.
+        let mut sim = sheet(32, 0.6, Material::canvas(), PinPreset::None, integrator);
+        for c in 0..32 {
+            sim.pin_cell(0, c).unwrap();
+            sim.pin_cell(31, c).unwrap();
+        }
+        run(&mut sim, &mut world, 180);
+        for (k, b) in boxes.iter().enumerate() {
+            let body = &world.bodies[*b];
+            assert!(
+                body.translation().y > 0.2,
+                "{integrator}: box {k} fell to y = {}",
+                body.translation().y
+            );
+            assert!(
+                body.linvel().length() < 0.1,
+                "{integrator}: box {k} still moving"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_tablecloth_dropped_on_a_table_drapes_without_stretching() {
+    for integrator in INTEGRATORS {
+        let mut world = PhysicsWorld::new();
+        // A table top 0.8 × 0.8 m at y = 0.75, on a leg.
+        world.insert(
+            RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.725, 0.0)),
+            ColliderBuilder::cuboid(0.4, 0.025, 0.4),
+        );
+        world.insert(
+            RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.35, 0.0)),
+            ColliderBuilder::cuboid(0.05, 0.35, 0.05),
+        );
+        let mut sim = Simulation::new(
+            ClothBuilder::new(48, 48)
+                .size(1.4, 1.4)
+                .horizontal(Vector::new(0.0, 0.95, 0.0))
+                .material(Material::cotton())
+                .build()
+                .unwrap(),
+        )
+        .with_integrator(integrator);
+        run(&mut sim, &mut world, 120);
+        let stretch = sim.max_strain(SpringKind::Stretch);
+        assert!(stretch < 0.05, "{integrator}: stretched {stretch}");
+        // On the table: its middle rests on the top, its skirt hangs down.
+        let middle = sim.positions()[sim.index(24, 24).unwrap()];
+        assert!(
+            (middle.y - 0.76).abs() < 0.02,
+            "{integrator}: middle at {middle}"
+        );
+        let lowest = sim.positions().iter().map(|p| p.y).fold(f32::MAX, f32::min);
+        assert!(lowest < 0.6, "{integrator}: the skirt hangs to {lowest}");
+    }
+}
