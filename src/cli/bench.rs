@@ -35,9 +35,9 @@ pub struct BenchRow {
     pub particle_substeps_per_s: f64,
     /// Spring evaluations per second (explicit integrators: springs × substeps × force evaluations).
     pub spring_evals_per_s: Option<f64>,
-    /// Largest stretch-spring strain at the end.
+    /// Largest stretch-spring strain over every frame of the run (warm-up and timed).
     pub max_stretch: f32,
-    /// Deepest particle inside an obstacle at the end, in metres.
+    /// Deepest any particle lay inside an obstacle over every frame, in metres.
     pub max_penetration: f32,
     /// rapier's frame time over this one's at the same N (cloth3d rows).
     pub speedup_vs_rapier: Option<f64>,
@@ -65,8 +65,15 @@ pub fn bench_cloth3d(
             ..Default::default()
         },
     )?;
+    // Stretch and penetration are measured after every frame, outside the timing.
+    let (mut stretch, mut deepest) = (0.0f32, 0.0f32);
+    let mut measure = |scene: &Scene| {
+        stretch = stretch.max(crate::metrics::max_stretch(&scene.cloth));
+        deepest = deepest.max(scene.max_penetration());
+    };
     for _ in 0..warmup {
         scene.step_frame()?;
+        measure(&scene);
     }
     let mut times = Vec::with_capacity(frames as usize);
     let mut substeps = 0;
@@ -75,6 +82,7 @@ pub fn bench_cloth3d(
         let report = scene.step_frame()?;
         times.push(start.elapsed().as_secs_f64());
         substeps = report.substeps;
+        measure(&scene);
     }
     let frame = median(times);
     let particles = scene.cloth.particle_count() as f64;
@@ -92,8 +100,8 @@ pub fn bench_cloth3d(
         spring_evals_per_s: integrator
             .is_explicit()
             .then(|| per_s(springs * substeps as f64 * integrator.force_evaluations() as f64)),
-        max_stretch: crate::metrics::max_stretch(&scene.cloth),
-        max_penetration: scene.max_penetration(),
+        max_stretch: stretch,
+        max_penetration: deepest,
         speedup_vs_rapier: None,
     })
 }
@@ -246,6 +254,42 @@ pub fn target_lines(rows: &[BenchRow]) -> Vec<String> {
             ));
         }
     }
+    // The real-time targets of the small-steps solver (one thread, drape).
+    for row in rows
+        .iter()
+        .filter(|r| r.engine == "cloth3d" && r.integrator == Integrator::Xpbd.name())
+    {
+        let budget = match row.n {
+            64 => Some(2.0),
+            128 => Some(8.0),
+            256 => Some(40.0),
+            _ => None,
+        };
+        if let Some(budget) = budget {
+            let ms = 1000.0 * row.frame_wall_s;
+            lines.push(format!(
+                "{} N={} <= {budget} ms a frame: {ms:.2} ms ({})",
+                row.integrator,
+                row.n,
+                verdict(budget / ms)
+            ));
+            lines.push(format!(
+                "{} N={} stretch < 5% in every frame: {:.2}% ({})",
+                row.integrator,
+                row.n,
+                100.0 * row.max_stretch,
+                verdict(0.05 / (row.max_stretch as f64).max(1e-9))
+            ));
+        }
+        if let (Some(x), 64 | 128) = (row.speedup_vs_rapier, row.n) {
+            lines.push(format!(
+                "{} N={} >= 10x rapier's cloth: {x:.2}x ({})",
+                row.integrator,
+                row.n,
+                verdict(x / 10.0)
+            ));
+        }
+    }
     for row in rows.iter().filter(|r| r.engine == "cloth3d") {
         if let Some(x) = row.speedup_vs_rapier {
             lines.push(format!(
@@ -292,5 +336,11 @@ mod tests {
         assert!(find("fast-mass-spring N=128 <=").ends_with("(met)"));
         assert!(find("implicit-euler N=128 <=").ends_with("(missed by 3.0x)"));
         assert!(find("implicit-euler N=128 >= 3x").ends_with("(met)"));
+        // The small-steps solver's real-time targets at N = 128.
+        let lines = target_lines(&[row("xpbd", 16.0, None)]);
+        let find = |s: &str| lines.iter().find(|l| l.starts_with(s)).cloned().unwrap();
+        assert!(find("xpbd N=128 <= 8 ms").ends_with("(missed by 2.0x)"));
+        assert!(find("xpbd N=128 stretch < 5%").ends_with("(met)"));
+        assert!(find("xpbd N=128 >= 10x").ends_with("(missed by 1.7x)"));
     }
 }

@@ -98,7 +98,7 @@ pub fn compare_desc(desc: &SceneDesc, frames: u32) -> Result<Vec<Comparison>, Sc
 }
 
 /// A line colour per integrator, in the order of [`Integrator::ALL`].
-pub const COLORS: [[u8; 3]; 6] = super::plot::COLORS;
+pub const COLORS: [[u8; 3]; 7] = super::plot::COLORS;
 
 /// The plot: energy (top) and max stretch (bottom) against the frame, one
 /// line per integrator in the colours of [`COLORS`], with a legend.

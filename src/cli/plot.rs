@@ -30,13 +30,14 @@ pub struct Panel {
 }
 
 /// Colours of successive curves.
-pub const COLORS: [[u8; 3]; 6] = [
+pub const COLORS: [[u8; 3]; 7] = [
     [230, 90, 80],
     [90, 170, 240],
     [120, 200, 110],
     [240, 190, 70],
     [190, 120, 230],
     [80, 210, 200],
+    [240, 120, 180],
 ];
 
 fn register_font() {

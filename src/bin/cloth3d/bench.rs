@@ -17,7 +17,7 @@ pub struct BenchArgs {
     #[arg(long, value_parser = parse_n, default_values = ["32", "64", "128", "256"], allow_hyphen_values = true)]
     pub n: Vec<usize>,
     /// Integrators (repeatable).
-    #[arg(long, value_parser = parse_integrator, default_values = ["symplectic-euler", "implicit-euler", "fast-mass-spring"])]
+    #[arg(long, value_parser = parse_integrator, default_values = ["xpbd", "symplectic-euler", "implicit-euler", "fast-mass-spring"])]
     pub integrator: Vec<Integrator>,
     /// Frames run before timing (the cloth lands on the obstacle).
     #[arg(long, value_parser = parse_count, default_value = "30", allow_hyphen_values = true)]
