@@ -5,7 +5,7 @@ mod common;
 use cloth3d::prelude::*;
 use cloth3d::scenes::run;
 use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
-use common::{max_distance, oscillator};
+use common::{max_distance, oscillator, spinning};
 
 #[test]
 fn implicit_euler_never_adds_energy_to_an_undamped_system() {
@@ -24,23 +24,7 @@ fn implicit_euler_never_adds_energy_to_an_undamped_system() {
     }
     // A free, undamped cloth thrown and spinning, at game steps.
     for h in [1.0f32 / 60.0, 0.1] {
-        let mut cloth = Simulation::new(ClothBuilder::new(8, 8).build().unwrap());
-        cloth.params.gravity = Vector::ZERO;
-        cloth.params.air_drag = 0.0;
-        for kind in SpringKind::ALL {
-            cloth.material.params_mut(kind).damping = 0.0;
-        }
-        cloth.set_integrator(Integrator::ImplicitEuler);
-        cloth.solver.settings.substeps = Substeps::Fixed(1);
-        for i in 0..cloth.particle_count() {
-            let p = cloth.positions()[i];
-            cloth
-                .set_velocity(
-                    i,
-                    Vector::new(-p.z, 0.3, p.x) * 2.0 + Vector::new(0.0, (i % 3) as f32, 0.0),
-                )
-                .unwrap();
-        }
+        let mut cloth = spinning(Integrator::ImplicitEuler, Substeps::Fixed(1), false);
         let e0 = cloth.energy().total();
         for _ in 0..100 {
             cloth.step(h, &[]).unwrap();

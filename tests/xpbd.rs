@@ -67,28 +67,9 @@ fn xpbd_hangs_where_the_force_based_integrators_hang() {
     assert!(sagged < 0.75 - 1e-3, "it sags under its weight: {sagged}");
 }
 
-/// A free 8×8 cloth thrown and spinning, without gravity or drag.
+/// The thrown, spinning cloth of `common::spinning` with the small-steps solver.
 fn spinning(damped: bool, substeps: Substeps) -> Simulation {
-    let mut cloth =
-        Simulation::new(ClothBuilder::new(8, 8).build().unwrap()).with_integrator(Integrator::Xpbd);
-    cloth.solver.settings.substeps = substeps;
-    cloth.params.gravity = Vector::ZERO;
-    cloth.params.air_drag = 0.0;
-    if !damped {
-        for kind in SpringKind::ALL {
-            cloth.material.params_mut(kind).damping = 0.0;
-        }
-    }
-    for i in 0..cloth.particle_count() {
-        let p = cloth.positions()[i];
-        cloth
-            .set_velocity(
-                i,
-                Vector::new(-p.z, 0.3, p.x) * 2.0 + Vector::new(0.0, (i % 3) as f32, 0.0),
-            )
-            .unwrap();
-    }
-    cloth
+    common::spinning(Integrator::Xpbd, substeps, damped)
 }
 
 #[test]

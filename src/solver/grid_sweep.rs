@@ -252,73 +252,63 @@ fn across_rows(pass: &mut Pass, lanes: &mut Lanes, k: Compliance, cols: usize, r
     }
 }
 
+/// The slices of one row, for the springs along it.
+struct Row<'a> {
+    x: &'a mut [f32],
+    y: &'a mut [f32],
+    z: &'a mut [f32],
+    sx: &'a [f32],
+    sy: &'a [f32],
+    sz: &'a [f32],
+    w: &'a [f32],
+    rest: &'a [f32],
+    lambda: &'a mut [f32],
+}
+
+impl Row<'_> {
+    /// Projects the spring from column `a` to column `b` of the row.
+    #[inline(always)]
+    fn spring(&mut self, a: usize, b: usize, k: Compliance) {
+        let motion = [
+            (self.x[b] - self.sx[b]) - (self.x[a] - self.sx[a]),
+            (self.y[b] - self.sy[b]) - (self.y[a] - self.sy[a]),
+            (self.z[b] - self.sz[b]) - (self.z[a] - self.sz[a]),
+        ];
+        let (na, nb) = project(
+            [self.x[a], self.y[a], self.z[a]],
+            [self.x[b], self.y[b], self.z[b]],
+            motion,
+            [self.w[a], self.w[b]],
+            (self.rest[a], &mut self.lambda[a]),
+            k,
+        );
+        [self.x[a], self.y[a], self.z[a]] = na;
+        [self.x[b], self.y[b], self.z[b]] = nb;
+    }
+}
+
 /// A family along rows: the springs of a row `period` columns apart are independent.
 #[inline(always)]
 fn along_rows(pass: &mut Pass, lanes: &mut Lanes, k: Compliance, cols: usize, rows: usize) {
     let dc = pass.dc as usize;
     for r in 0..rows {
-        let row = r * cols..(r + 1) * cols;
-        let (x, y, z) = (
-            &mut lanes.x[row.clone()],
-            &mut lanes.y[row.clone()],
-            &mut lanes.z[row.clone()],
-        );
-        let (sx, sy, sz) = (
-            &lanes.sx[row.clone()],
-            &lanes.sy[row.clone()],
-            &lanes.sz[row.clone()],
-        );
-        let (w, rest) = (&lanes.w[row.clone()], &pass.rest[row.clone()]);
-        let lambda = &mut pass.lambda[row];
-        for p in 0..pass.period.min(cols) {
-            // Chunks of `period` columns: spring from column 0 to `dc` of each.
-            let chunks = x[p..]
-                .chunks_exact_mut(pass.period)
-                .zip(y[p..].chunks_exact_mut(pass.period))
-                .zip(z[p..].chunks_exact_mut(pass.period))
-                .zip(sx[p..].chunks_exact(pass.period))
-                .zip(sy[p..].chunks_exact(pass.period))
-                .zip(sz[p..].chunks_exact(pass.period))
-                .zip(w[p..].chunks_exact(pass.period))
-                .zip(rest[p..].chunks_exact(pass.period))
-                .zip(lambda[p..].chunks_exact_mut(pass.period));
-            for ((((((((x, y), z), sx), sy), sz), w), rest), lambda) in chunks {
-                let (a, b) = (0, dc);
-                let motion = [
-                    (x[b] - sx[b]) - (x[a] - sx[a]),
-                    (y[b] - sy[b]) - (y[a] - sy[a]),
-                    (z[b] - sz[b]) - (z[a] - sz[a]),
-                ];
-                let (na, nb) = project(
-                    [x[a], y[a], z[a]],
-                    [x[b], y[b], z[b]],
-                    motion,
-                    [w[a], w[b]],
-                    (rest[a], &mut lambda[a]),
-                    k,
-                );
-                [x[a], y[a], z[a]] = na;
-                [x[b], y[b], z[b]] = nb;
-            }
-            // The last spring when the row does not end on a whole chunk.
-            let a = p + (cols - p) / pass.period * pass.period;
-            if a < cols && a + dc < cols {
-                let b = a + dc;
-                let motion = [
-                    (x[b] - sx[b]) - (x[a] - sx[a]),
-                    (y[b] - sy[b]) - (y[a] - sy[a]),
-                    (z[b] - sz[b]) - (z[a] - sz[a]),
-                ];
-                let (na, nb) = project(
-                    [x[a], y[a], z[a]],
-                    [x[b], y[b], z[b]],
-                    motion,
-                    [w[a], w[b]],
-                    (rest[a], &mut lambda[a]),
-                    k,
-                );
-                [x[a], y[a], z[a]] = na;
-                [x[b], y[b], z[b]] = nb;
+        let span = r * cols..(r + 1) * cols;
+        let mut row = Row {
+            x: &mut lanes.x[span.clone()],
+            y: &mut lanes.y[span.clone()],
+            z: &mut lanes.z[span.clone()],
+            sx: &lanes.sx[span.clone()],
+            sy: &lanes.sy[span.clone()],
+            sz: &lanes.sz[span.clone()],
+            w: &lanes.w[span.clone()],
+            rest: &pass.rest[span.clone()],
+            lambda: &mut pass.lambda[span],
+        };
+        for p in 0..pass.period {
+            let mut a = p;
+            while a + dc < cols {
+                row.spring(a, a + dc, k);
+                a += pass.period;
             }
         }
     }

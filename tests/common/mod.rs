@@ -109,3 +109,29 @@ pub fn max_distance(a: &[Vector], b: &[Vector]) -> f32 {
         .map(|(a, b)| (*a - *b).length())
         .fold(0.0, f32::max)
 }
+
+/// A free 8×8 cloth thrown and spinning (a rigid turn at 2 rad/s, and every
+/// third particle faster upwards than its neighbours), without gravity or
+/// drag; without the material's damping when `damped` is false.
+pub fn spinning(integrator: Integrator, substeps: Substeps, damped: bool) -> Simulation {
+    let mut cloth = Simulation::new(ClothBuilder::new(8, 8).build().unwrap());
+    cloth.set_integrator(integrator);
+    cloth.solver.settings.substeps = substeps;
+    cloth.params.gravity = Vector::ZERO;
+    cloth.params.air_drag = 0.0;
+    if !damped {
+        for kind in SpringKind::ALL {
+            cloth.material.params_mut(kind).damping = 0.0;
+        }
+    }
+    for i in 0..cloth.particle_count() {
+        let p = cloth.positions()[i];
+        cloth
+            .set_velocity(
+                i,
+                Vector::new(-p.z, 0.3, p.x) * 2.0 + Vector::new(0.0, (i % 3) as f32, 0.0),
+            )
+            .unwrap();
+    }
+    cloth
+}
