@@ -78,19 +78,19 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
     match (&mut ws.plan, sub.grid) {
         (Some(plan), Some(_)) => {
             plan.reset();
+            // Structure of arrays for the row kernel: positions now, at the
+            // substep's start, and inverse masses.
             let l = &mut ws.lanes;
-            for (buf, value) in [
-                (&mut l.x, 0usize),
-                (&mut l.y, 1),
-                (&mut l.z, 2),
-                (&mut l.sx, 3),
-                (&mut l.sy, 4),
-                (&mut l.sz, 5),
-            ] {
+            let lanes_of = |buf: &mut Vec<f32>, from: &[Vector], axis: usize| {
                 buf.clear();
-                let from = if value < 3 { &*x } else { &ws.start[..] };
-                buf.extend(from.iter().map(|p| p[value % 3]));
-            }
+                buf.extend(from.iter().map(|p| p[axis]));
+            };
+            lanes_of(&mut l.x, x, 0);
+            lanes_of(&mut l.y, x, 1);
+            lanes_of(&mut l.z, x, 2);
+            lanes_of(&mut l.sx, &ws.start, 0);
+            lanes_of(&mut l.sy, &ws.start, 1);
+            lanes_of(&mut l.sz, &ws.start, 2);
             l.w.clear();
             l.w.extend_from_slice(model.inv_mass);
             for _ in 0..sub.settings.xpbd_iterations {
