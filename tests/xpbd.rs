@@ -151,3 +151,31 @@ fn the_box_scene_does_not_cut_the_cube_with_xpbd() {
         "it lies on the cube: {m:?}"
     );
 }
+
+#[test]
+fn a_solver_handed_another_cloth_of_the_same_grid_steps_it_as_a_fresh_one() {
+    let cloth = |size: f32| {
+        ClothBuilder::new(12, 12)
+            .size(size, size)
+            .pins(PinPreset::TwoCorners)
+            .build()
+            .unwrap()
+    };
+    // A solver that stepped a 1 m cloth, then a 2 m one of the same grid.
+    let mut used = ClothSolver::with_integrator(Integrator::Xpbd);
+    let mut small = cloth(1.0);
+    for _ in 0..5 {
+        used.step(&mut small, 1.0 / 60.0, &[]).unwrap();
+    }
+    let (mut a, mut b) = (cloth(2.0), cloth(2.0));
+    let mut fresh = ClothSolver::with_integrator(Integrator::Xpbd);
+    for _ in 0..20 {
+        used.step(&mut a, 1.0 / 60.0, &[]).unwrap();
+        fresh.step(&mut b, 1.0 / 60.0, &[]).unwrap();
+    }
+    assert_eq!(
+        a.positions(),
+        b.positions(),
+        "the 1 m cloth's rest lengths leaked"
+    );
+}

@@ -41,7 +41,6 @@ struct Pass {
 #[derive(Debug, Clone)]
 pub(crate) struct GridPlan {
     grid: Grid,
-    springs: usize,
     passes: Vec<Pass>,
 }
 
@@ -104,16 +103,7 @@ impl GridPlan {
         if count != full {
             return None;
         }
-        Some(GridPlan {
-            grid,
-            springs: springs.len(),
-            passes,
-        })
-    }
-
-    /// True when the plan was made for this grid and spring count.
-    pub fn fits(&self, grid: Grid, springs: usize) -> bool {
-        self.grid == grid && self.springs == springs
+        Some(GridPlan { grid, passes })
     }
 }
 

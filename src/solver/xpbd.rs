@@ -14,7 +14,7 @@
 //! under a steady load ends where `k C` balances the load: the equilibrium
 //! of the force-based integrators.
 
-use crate::cloth::SpringKind;
+use crate::cloth::{Grid, SpringKind, Springs};
 use crate::forces::add_wind_forces;
 use crate::math::Vector;
 
@@ -30,13 +30,39 @@ pub(crate) struct XpbdScratch {
     wind: Vec<Vector>,
     /// The grid's springs as row passes, for a grid cloth.
     plan: Option<GridPlan>,
+    /// Which springs `plan` was made (or found impossible) for.
+    planned_for: Option<PlanKey>,
     /// Structure-of-arrays copies for the grid sweep.
     lanes: Lanes,
     /// Per spring: its multiplier over the substep's sweeps (the generic sweep).
     lambda: Vec<f32>,
 }
 
-/// One substep: predict, one sweep over the springs, velocities from the motion.
+/// What a grid plan depends on: the grid, and which springs (their storage,
+/// count and first and last rest lengths: a solver handed another cloth of
+/// the same grid but another size makes a new plan).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct PlanKey {
+    grid: Grid,
+    springs: usize,
+    count: usize,
+    ends: [u32; 2],
+}
+
+impl PlanKey {
+    fn of(grid: Grid, springs: &Springs) -> PlanKey {
+        let rest = springs.rest_lengths();
+        let bits = |r: Option<&f32>| r.map_or(0, |r| r.to_bits());
+        PlanKey {
+            grid,
+            springs: springs as *const Springs as usize,
+            count: springs.len(),
+            ends: [bits(rest.first()), bits(rest.last())],
+        }
+    }
+}
+
+/// One substep: predict, sweep over the springs, velocities from the motion.
 pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut XpbdScratch) {
     let model = &sub.model;
     let h = sub.ctx.h;
@@ -67,12 +93,10 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
         gamma: p.damping / (p.stiffness * h),
     });
     if let Some(grid) = sub.grid {
-        if !ws
-            .plan
-            .as_ref()
-            .is_some_and(|p| p.fits(grid, model.springs.len()))
-        {
+        let key = PlanKey::of(grid, model.springs);
+        if ws.planned_for != Some(key) {
             ws.plan = GridPlan::new(grid, model.springs);
+            ws.planned_for = Some(key);
         }
     }
     match (&mut ws.plan, sub.grid) {
