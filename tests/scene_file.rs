@@ -307,7 +307,7 @@ fn compare_takes_a_scene_file() {
         plot.to_str().unwrap(),
     ]);
     let rows = json_lines(&stdout);
-    assert_eq!(rows.len(), 6, "{stdout}");
+    assert_eq!(rows.len(), cloth3d::Integrator::ALL.len(), "{stdout}");
     assert!(rows.iter().all(|r| r["stable"] == true), "{stdout}");
     let _ = std::fs::remove_file(&plot);
 }
