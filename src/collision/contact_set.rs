@@ -76,11 +76,6 @@ impl ContactSet {
             })
     }
 
-    /// True when particle `i` touches an obstacle.
-    pub fn is_touching(&self, i: usize) -> bool {
-        self.touching.get(i).copied().unwrap_or(false)
-    }
-
     /// The obstacle particle `i` last touched (stale when it does not touch one now).
     pub(crate) fn last_obstacle(&self, i: usize) -> u32 {
         self.obstacle[i]

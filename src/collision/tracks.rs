@@ -37,6 +37,8 @@ pub(crate) struct ObstacleTracks {
     /// Per obstacle: the centre (in its own frame, m) and radius (m) of a
     /// sphere around it, to tell cheaply that a point is far from it.
     bounds: Vec<(Vector, f32)>,
+    /// Per obstacle: that sphere's centre where the obstacle is now (m).
+    centers: Vec<Vector>,
 }
 
 impl ObstacleTracks {
@@ -62,6 +64,7 @@ impl ObstacleTracks {
             let sphere = o.shape.compute_local_bounding_sphere();
             (sphere.center, sphere.radius)
         }));
+        self.place_bounds();
         self.com.clear();
         self.com_velocity.clear();
         self.angvel.clear();
@@ -98,8 +101,7 @@ impl ObstacleTracks {
     /// `o` where it is now: outside a sphere around it by that much.
     #[inline]
     pub(super) fn surely_beyond(&self, o: usize, point: Vector, distance: f32) -> bool {
-        let (center, radius) = self.bounds[o];
-        let center = self.poses[o].transform_point(center);
+        let (center, radius) = (self.centers[o], self.bounds[o].1);
         (point - center).length_squared() > (radius + distance) * (radius + distance)
     }
 
@@ -143,6 +145,19 @@ impl ObstacleTracks {
             pose.translation = self.com[o] + spin * arm;
             pose.rotation = (spin * pose.rotation).normalize();
         }
+        self.place_bounds();
+    }
+
+    /// The bounding spheres' centres at the obstacles' current poses, once
+    /// per substep rather than once per particle.
+    fn place_bounds(&mut self) {
+        self.centers.clear();
+        self.centers.extend(
+            self.bounds
+                .iter()
+                .zip(&self.poses)
+                .map(|(&(center, _), pose)| pose.transform_point(center)),
+        );
     }
 
     /// Velocity of the material point of obstacle `o` at `point`, now.
