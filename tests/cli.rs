@@ -303,6 +303,34 @@ fn bench_json_has_every_figure_and_plots_them() {
 }
 
 #[test]
+fn bench_takes_the_substeps_and_sweeps_it_is_given() {
+    let stdout = cloth3d_ok(&[
+        "bench",
+        "--n",
+        "8",
+        "--integrator",
+        "xpbd",
+        "--substeps",
+        "7",
+        "--xpbd-iterations",
+        "3",
+        "--warmup",
+        "1",
+        "--frames",
+        "1",
+        "--no-rapier",
+        "--json",
+    ]);
+    let rows = json_lines(&stdout);
+    assert_eq!(rows.len(), 1, "{stdout}");
+    assert_eq!(rows[0]["substeps"], 7, "{stdout}");
+    let bad = cloth3d(&["bench", "--xpbd-iterations", "0", "--no-rapier"]);
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("xpbd-iterations"), "{stderr}");
+}
+
+#[test]
 fn export_scene_writes_the_solver_flags_and_run_uses_them() {
     let dir = std::env::temp_dir().join(format!("cloth3d-export-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

@@ -48,21 +48,24 @@ fn median(mut v: Vec<f64>) -> f64 {
     v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
-/// Runs `warmup + frames` frames of a cloth3d scene and times the last `frames`.
+/// Runs `warmup + frames` frames of a cloth3d scene and times the last
+/// `frames`. `tuning` carries the user's other overrides (substeps, solver
+/// iterations); its `n` and `integrator` are replaced by the row's, and
+/// without substeps the integrator's default ones are used.
 pub fn bench_cloth3d(
     kind: SceneKind,
     n: usize,
     integrator: Integrator,
-    warmup: u32,
-    frames: u32,
+    (warmup, frames): (u32, u32),
+    tuning: &SceneOptions,
 ) -> Result<BenchRow, SceneError> {
     let mut scene = Scene::build(
         kind,
         &SceneOptions {
             n: Some(n),
             integrator: Some(integrator),
-            substeps: Some(integrator.default_substeps()),
-            ..Default::default()
+            substeps: Some(tuning.substeps.unwrap_or(integrator.default_substeps())),
+            ..tuning.clone()
         },
     )?;
     // Stretch and penetration are measured after every frame, outside the timing.

@@ -2,9 +2,13 @@
 
 use std::process::ExitCode;
 
-use cloth3d::cli::args::{parse_count, parse_frames, parse_integrator, parse_n, parse_scene};
+use cloth3d::cli::args::{
+    parse_count, parse_frames, parse_integrator, parse_iterations, parse_n, parse_scene,
+    parse_substeps,
+};
 use cloth3d::scenes::SceneKind;
-use cloth3d::solver::Integrator;
+use cloth3d::scenes::{SceneOptions, SolverTuning};
+use cloth3d::solver::{Integrator, Substeps};
 
 use crate::output::emit;
 
@@ -28,6 +32,12 @@ pub struct BenchArgs {
     /// Threads (only 1 until the parallel step lands).
     #[arg(long, value_parser = parse_frames, default_value = "1", allow_hyphen_values = true)]
     pub threads: u32,
+    /// Substeps per frame for every row (`auto` or a count; default: each integrator's own).
+    #[arg(long, value_parser = parse_substeps)]
+    pub substeps: Option<Substeps>,
+    /// Spring sweeps per substep of the small-steps solver (xpbd).
+    #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
+    pub xpbd_iterations: Option<u32>,
     /// Skip rapier's built-in cloth.
     #[arg(long)]
     pub no_rapier: bool,
@@ -88,6 +98,14 @@ fn bench_rows(args: &BenchArgs) -> ExitCode {
             "vs rapier"
         ));
     }
+    let tuning = SceneOptions {
+        substeps: args.substeps,
+        solver: SolverTuning {
+            xpbd_iterations: args.xpbd_iterations,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
     let mut rows = Vec::new();
     let mut print = |row: &BenchRow| {
         rows.push(row.clone());
@@ -130,7 +148,7 @@ fn bench_rows(args: &BenchArgs) -> ExitCode {
                     }
                     continue;
                 }
-                match bench_cloth3d(kind, n, integrator, args.warmup, args.frames) {
+                match bench_cloth3d(kind, n, integrator, (args.warmup, args.frames), &tuning) {
                     Ok(mut row) => {
                         row.speedup_vs_rapier = rapier
                             .as_ref()
