@@ -179,3 +179,52 @@ fn a_solver_handed_another_cloth_of_the_same_grid_steps_it_as_a_fresh_one() {
         "the 1 m cloth's rest lengths leaked"
     );
 }
+
+/// Many substeps make each substep's motion smaller than the spacing of
+/// `f32` positions near 1 m; velocities taken as `(x − x_start)/h` would
+/// read zero there and the cloth would hang in the air. It falls as a body
+/// in free fall does, grid sweep and general sweep alike.
+#[test]
+fn xpbd_cloth_falls_freely_at_many_substeps() {
+    for grid in [true, false] {
+        let built = ClothBuilder::new(6, 6)
+            .size(0.3, 0.3)
+            .horizontal(Vector::new(0.0, 1.0, 0.0))
+            .build()
+            .unwrap();
+        let cloth = if grid {
+            built
+        } else {
+            Cloth::from_parts(
+                built.positions().to_vec(),
+                built.masses().to_vec(),
+                built.springs().iter().collect(),
+                built.triangles().to_vec(),
+                built.material.clone(),
+            )
+            .unwrap()
+        };
+        let mut sim = Simulation::new(cloth).with_integrator(Integrator::Xpbd);
+        sim.solver.settings.substeps = Substeps::Fixed(500);
+        sim.params.air_drag = 0.0;
+        let y0 = sim.centroid().y;
+        let frames = 30;
+        for _ in 0..frames {
+            sim.step(1.0 / 60.0, &[]).unwrap();
+        }
+        let t = frames as f32 / 60.0;
+        let g = sim.params.gravity.y;
+        let vy = sim.velocities().iter().map(|v| v.y).sum::<f32>() / sim.particle_count() as f32;
+        assert!(
+            (vy - g * t).abs() < 0.01 * (g * t).abs(),
+            "grid {grid}: vy {vy}, expected {}",
+            g * t
+        );
+        let drop = sim.centroid().y - y0;
+        let expected = 0.5 * g * t * t;
+        assert!(
+            (drop - expected).abs() < 0.02 * expected.abs(),
+            "grid {grid}: fell {drop}, expected {expected}"
+        );
+    }
+}

@@ -10,7 +10,11 @@
 //! `x += h v`; for each spring, `C = |x_b − x_a| − L`, `α = 1/(k h²)`,
 //! `γ = c/(k h)`, `Δλ = −(C + γ n·(Δx_b − Δx_a)) / ((1 + γ)(w_a + w_b) + α)`
 //! with `Δx` the motion since the substep's start, and `x_a −= w_a Δλ n`,
-//! `x_b += w_b Δλ n`; then `v = (x − x_start)/h`. A spring at rest length
+//! `x_b += w_b Δλ n`; then `v = (x − x_start)/h`, computed as the predicted
+//! velocity plus the sweep's correction over `h` (the same in exact
+//! arithmetic, but in `f32` a substep's motion `v h` can be smaller than the
+//! spacing of floats at the position: `x − x_start` would then read zero and
+//! a falling cloth would never gain speed). A spring at rest length
 //! under a steady load ends where `k C` balances the load: the equilibrium
 //! of the force-based integrators.
 
@@ -26,6 +30,8 @@ use super::substep::Substep;
 pub(crate) struct XpbdScratch {
     /// Positions at the start of the substep.
     start: Vec<Vector>,
+    /// Positions after the prediction, before the sweeps (the general sweep).
+    predicted: Vec<Vector>,
     /// Wind forces (N).
     wind: Vec<Vector>,
     /// The grid's springs as row passes, for a grid cloth.
@@ -120,25 +126,35 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
             for _ in 0..sub.settings.xpbd_iterations {
                 sweep(plan, l, &compliance);
             }
+            // Velocities from the motion: `x` still holds the prediction.
             for i in 0..n {
-                x[i] = Vector::new(l.x[i], l.y[i], l.z[i]);
+                let swept = Vector::new(l.x[i], l.y[i], l.z[i]);
+                correct_velocity(&mut v[i], swept - x[i], model.inv_mass[i], h);
+                x[i] = swept;
             }
         }
         _ => {
+            ws.predicted.clear();
+            ws.predicted.extend_from_slice(x);
             ws.lambda.clear();
             ws.lambda.resize(model.springs.len(), 0.0);
             for _ in 0..sub.settings.xpbd_iterations {
                 sweep_colour_classes(sub, x, &ws.start, &mut ws.lambda, &compliance);
             }
+            for i in 0..n {
+                let correction = x[i] - ws.predicted[i];
+                correct_velocity(&mut v[i], correction, model.inv_mass[i], h);
+            }
         }
     }
-    // Velocities from the motion.
-    let start = &ws.start[..];
-    let inv_h = 1.0 / h;
-    for i in 0..n {
-        if model.inv_mass[i] != 0.0 {
-            v[i] = (x[i] - start[i]) * inv_h;
-        }
+}
+
+/// The velocity at the end of a substep of `h` seconds: the predicted one
+/// plus what the sweeps moved the particle, over `h` (pinned particles keep theirs).
+#[inline(always)]
+fn correct_velocity(v: &mut Vector, correction: Vector, inv_mass: f32, h: f32) {
+    if inv_mass != 0.0 {
+        *v += correction / h;
     }
 }
 
