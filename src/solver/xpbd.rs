@@ -111,24 +111,24 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
             // Structure of arrays for the row kernel: positions now, at the
             // substep's start, and inverse masses.
             let l = &mut ws.lanes;
-            let lanes_of = |buf: &mut Vec<f32>, from: &[Vector], axis: usize| {
-                buf.clear();
-                buf.extend(from.iter().map(|p| p[axis]));
-            };
-            lanes_of(&mut l.x, x, 0);
-            lanes_of(&mut l.y, x, 1);
-            lanes_of(&mut l.z, x, 2);
-            lanes_of(&mut l.sx, &ws.start, 0);
-            lanes_of(&mut l.sy, &ws.start, 1);
-            lanes_of(&mut l.sz, &ws.start, 2);
-            l.w.clear();
-            l.w.extend_from_slice(model.inv_mass);
+            for buf in [
+                &mut l.x, &mut l.y, &mut l.z, &mut l.sx, &mut l.sy, &mut l.sz, &mut l.w,
+            ] {
+                buf.resize(n, 0.0);
+            }
+            for i in 0..n {
+                let (lane, p, s) = (plan.lane(i), x[i], ws.start[i]);
+                (l.x[lane], l.y[lane], l.z[lane]) = (p.x, p.y, p.z);
+                (l.sx[lane], l.sy[lane], l.sz[lane]) = (s.x, s.y, s.z);
+                l.w[lane] = model.inv_mass[i];
+            }
             for _ in 0..sub.settings.xpbd_iterations {
                 sweep(plan, l, &compliance);
             }
             // Velocities from the motion: `x` still holds the prediction.
             for i in 0..n {
-                let swept = Vector::new(l.x[i], l.y[i], l.z[i]);
+                let lane = plan.lane(i);
+                let swept = Vector::new(l.x[lane], l.y[lane], l.z[lane]);
                 correct_velocity(&mut v[i], swept - x[i], model.inv_mass[i], h);
                 x[i] = swept;
             }
