@@ -88,7 +88,7 @@ fn segments(cols: usize, rows: usize, dr: usize, dc: isize, period: usize) -> Ve
                     let to = (BLOCKS * k + j) as isize + dc;
                     to >= 0 && (to as usize) < cols
                 });
-                let (Some(k0), Some(k1)) = (ks.clone().next(), ks.last()) else {
+                let (Some(k0), Some(k1)) = (ks.clone().next(), ks.clone().next_back()) else {
                     continue;
                 };
                 let to = (BLOCKS * k0 + j) as isize + dc;
