@@ -33,12 +33,86 @@ const ON_SURFACE: f32 = 1.0e-6;
 /// centre is pushed out along `+y`; a point exactly on an edge or corner gets
 /// the feature's normal (or the direction from the shape's centre).
 pub fn contact(shape: &dyn Shape, pose: &Pose, point: Vector) -> Option<Contact> {
-    if let Some(ball) = shape.as_ball() {
-        return ball_contact(ball.radius, pose, point);
+    let analytic = Analytic::of(shape);
+    match analytic {
+        Analytic::Other => general_contact(shape, pose, point),
+        _ => contact_prepared(shape, analytic, &PoseF64::of(pose), point),
     }
-    if let Some(cuboid) = shape.as_cuboid() {
-        return cuboid_contact(cuboid.half_extents, pose, point);
+}
+
+/// What the analytic contacts need of a shape, read once per step instead
+/// of once per query (a downcast through `dyn Shape`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Analytic {
+    /// A ball of this radius (m).
+    Ball(f32),
+    /// A cuboid of these half extents (m).
+    Cuboid(Vector),
+    /// Any other shape: parry's point projection.
+    Other,
+}
+
+impl Analytic {
+    /// How contacts with `shape` are answered.
+    pub fn of(shape: &dyn Shape) -> Self {
+        if let Some(ball) = shape.as_ball() {
+            Analytic::Ball(ball.radius)
+        } else if let Some(cuboid) = shape.as_cuboid() {
+            Analytic::Cuboid(cuboid.half_extents)
+        } else {
+            Analytic::Other
+        }
     }
+}
+
+/// A pose with its rotation and translation in double precision, prepared
+/// once per substep for the analytic contacts (the same numbers each query
+/// would compute).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PoseF64 {
+    pose: Pose,
+    q: DQuat,
+    q_inv: DQuat,
+    t: DVec3,
+}
+
+impl PoseF64 {
+    /// `pose` in double precision.
+    pub fn of(pose: &Pose) -> Self {
+        let q = pose.rotation.as_dquat().normalize();
+        PoseF64 {
+            pose: *pose,
+            q,
+            q_inv: q.inverse(),
+            t: pose.translation.as_dvec3(),
+        }
+    }
+}
+
+impl Default for PoseF64 {
+    fn default() -> Self {
+        PoseF64::of(&Pose::IDENTITY)
+    }
+}
+
+/// [`contact`] with the shape's kind and the pose in double precision
+/// already found: the collision stage's per-particle query.
+#[inline]
+pub(crate) fn contact_prepared(
+    shape: &dyn Shape,
+    analytic: Analytic,
+    pose: &PoseF64,
+    point: Vector,
+) -> Option<Contact> {
+    match analytic {
+        Analytic::Ball(radius) => ball_contact(radius, pose, point),
+        Analytic::Cuboid(half) => cuboid_contact(half, pose, point),
+        Analytic::Other => general_contact(shape, &pose.pose, point),
+    }
+}
+
+/// Any shape through parry's `project_local_point`.
+fn general_contact(shape: &dyn Shape, pose: &Pose, point: Vector) -> Option<Contact> {
     let local = pose.inverse_transform_point(point);
     let proj = shape.project_local_point(local, false);
     let (surface, normal, signed) = if proj.point.is_finite() {
@@ -73,20 +147,15 @@ pub fn contact(shape: &dyn Shape, pose: &Pose, point: Vector) -> Option<Contact>
 
 /// The query point in the shape's frame, in double precision, so that the
 /// normal stays exact even a hair away from the surface.
-/// Also returns the pose's rotation in double precision, for [`to_world`].
-fn local_f64(pose: &Pose, point: Vector) -> (DVec3, DQuat) {
-    let q = pose.rotation.as_dquat().normalize();
-    let local = q
-        .inverse()
-        .mul_vec3(point.as_dvec3() - pose.translation.as_dvec3());
-    (local, q)
+fn local_f64(pose: &PoseF64, point: Vector) -> DVec3 {
+    pose.q_inv.mul_vec3(point.as_dvec3() - pose.t)
 }
 
-/// Back to world coordinates (`q`: the pose's rotation from [`local_f64`]), in single precision.
-fn to_world(pose: &Pose, q: DQuat, point: DVec3, normal: DVec3, signed: f64) -> Option<Contact> {
+/// Back to world coordinates, in single precision.
+fn to_world(pose: &PoseF64, point: DVec3, normal: DVec3, signed: f64) -> Option<Contact> {
     let contact = Contact {
-        point: (q.mul_vec3(point) + pose.translation.as_dvec3()).as_vec3(),
-        normal: q.mul_vec3(normal).as_vec3(),
+        point: (pose.q.mul_vec3(point) + pose.t).as_vec3(),
+        normal: pose.q.mul_vec3(normal).as_vec3(),
         signed_distance: signed as f32,
     };
     (contact.point.is_finite() && contact.normal.is_finite() && contact.signed_distance.is_finite())
@@ -94,30 +163,31 @@ fn to_world(pose: &Pose, q: DQuat, point: DVec3, normal: DVec3, signed: f64) -> 
 }
 
 /// A ball, analytically: `c + r (p - c)/|p - c|`; the centre pushes out along the world's up.
-fn ball_contact(radius: f32, pose: &Pose, point: Vector) -> Option<Contact> {
-    let (local, q) = local_f64(pose, point);
+fn ball_contact(radius: f32, pose: &PoseF64, point: Vector) -> Option<Contact> {
+    let local = local_f64(pose, point);
     let r = radius as f64;
     let dist = local.length();
     let normal = if dist > 1e-12 {
         local / dist
     } else {
-        pose.inverse_transform_vector(Vector::Y)
+        pose.pose
+            .inverse_transform_vector(Vector::Y)
             .as_dvec3()
             .normalize()
     };
-    to_world(pose, q, normal * r, normal, dist - r)
+    to_world(pose, normal * r, normal, dist - r)
 }
 
 /// A cuboid, analytically: the clamp of the point to the box when outside,
 /// the nearest face when inside.
-fn cuboid_contact(half: Vector, pose: &Pose, point: Vector) -> Option<Contact> {
-    let (local, q) = local_f64(pose, point);
+fn cuboid_contact(half: Vector, pose: &PoseF64, point: Vector) -> Option<Contact> {
+    let local = local_f64(pose, point);
     let h = half.as_dvec3();
     let clamped = local.clamp(-h, h);
     if clamped != local {
         let offset = local - clamped;
         let dist = offset.length();
-        return to_world(pose, q, clamped, offset / dist, dist);
+        return to_world(pose, clamped, offset / dist, dist);
     }
     let gaps = h - local.abs();
     let axis = if gaps.x <= gaps.y && gaps.x <= gaps.z {
@@ -132,7 +202,7 @@ fn cuboid_contact(half: Vector, pose: &Pose, point: Vector) -> Option<Contact> {
     normal[axis] = sign;
     let mut surface = local;
     surface[axis] = h[axis] * sign;
-    to_world(pose, q, surface, normal, -gaps[axis])
+    to_world(pose, surface, normal, -gaps[axis])
 }
 
 /// Outward normal at a local point lying on the surface.

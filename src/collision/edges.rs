@@ -3,7 +3,6 @@
 
 use parry3d::bounding_volume::Aabb;
 
-use super::contact::contact;
 use super::obstacle::Obstacle;
 use super::stage::CollisionStage;
 use crate::cloth::Particles;
@@ -53,7 +52,9 @@ impl CollisionStage {
             // shove it about.
             let pinned_inside = [(a, wa), (b, wb)].iter().any(|&(i, w)| {
                 w == 0.0
-                    && contact(&*obstacle.shape, &pose, p.x[i])
+                    && self
+                        .tracks
+                        .contact(obstacles, o, p.x[i])
                         .is_some_and(|c| c.signed_distance < 0.0)
             });
             if pinned_inside {
@@ -61,7 +62,7 @@ impl CollisionStage {
             }
             for &t in samples {
                 let sample = p.x[a] * (1.0 - t) + p.x[b] * t;
-                let Some(contact) = contact(&*obstacle.shape, &pose, sample) else {
+                let Some(contact) = self.tracks.contact(obstacles, o, sample) else {
                     continue;
                 };
                 if contact.signed_distance >= margin {

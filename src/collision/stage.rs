@@ -6,7 +6,7 @@
 use parry3d::bounding_volume::Aabb;
 use parry3d::query::Ray;
 
-use super::contact::{contact, Contact};
+use super::contact::Contact;
 use super::contact_set::{ContactSet, ParticleContact, NONE};
 use super::obstacle::{Obstacle, ObstacleImpulse};
 use super::response::FrictionPolicy;
@@ -50,6 +50,13 @@ impl CollisionStage {
         self.contacts.begin_step(particles, obstacles.len());
     }
 
+    /// Finds once for the step which obstacles each particle at `x` may meet
+    /// while it stays within `margin` metres of there (further, it is looked
+    /// up afresh: the cache changes no result, only the cost).
+    pub fn cache_candidates(&mut self, x: &[Vector], margin: f32) {
+        self.tracks.cache_candidates(x, margin);
+    }
+
     /// Moves the obstacles to where they are at the end of the context's substep.
     pub fn advance(&mut self, ctx: &StepContext, obstacles: &[Obstacle]) {
         self.tracks.advance_to(obstacles, ctx.substep_end(), ctx.h);
@@ -79,11 +86,11 @@ impl CollisionStage {
         &self,
         p: &Particles,
         i: usize,
-        obstacle: &Obstacle,
+        obstacles: &[Obstacle],
         o: usize,
     ) -> Option<Contact> {
-        let pose = &self.tracks.poses[o];
-        let c = contact(&*obstacle.shape, pose, p.x[i])?;
+        let (obstacle, pose) = (&obstacles[o], &self.tracks.poses[o]);
+        let c = self.tracks.contact(obstacles, o, p.x[i])?;
         if c.signed_distance >= 0.0 {
             return Some(c);
         }
@@ -134,7 +141,7 @@ impl CollisionStage {
             let mut best = thickness + CONTACT_SLACK;
             for c in 0..self.tracks.candidates.len() {
                 let o = self.tracks.candidates[c] as usize;
-                let Some(hit) = contact(&*obstacles[o].shape, &self.tracks.poses[o], x) else {
+                let Some(hit) = self.tracks.contact(obstacles, o, x) else {
                     continue;
                 };
                 let surface_v = self.tracks.surface_velocity_of(obstacles, o, hit.point);
@@ -192,7 +199,7 @@ impl CollisionStage {
         let mut deepest = None;
         for c in 0..self.tracks.candidates.len() {
             let o = self.tracks.candidates[c] as usize;
-            let Some(hit) = contact(&*obstacles[o].shape, &self.tracks.poses[o], x) else {
+            let Some(hit) = self.tracks.contact(obstacles, o, x) else {
                 continue;
             };
             let depth = thickness - hit.signed_distance;
@@ -227,7 +234,7 @@ impl CollisionStage {
         for i in 0..particles.len() {
             self.nearest[i] = NONE;
             self.contacts.clear(i);
-            self.tracks.gather(particles.x[i]);
+            self.tracks.gather_particle(i, particles.x[i]);
             let mut nearest_distance = f32::INFINITY;
             for c in 0..self.tracks.candidates.len() {
                 let o = self.tracks.candidates[c] as usize;
@@ -237,7 +244,7 @@ impl CollisionStage {
                 if self.tracks.surely_beyond(o, particles.x[i], far) {
                     continue;
                 }
-                let Some(hit) = self.particle_contact(particles, i, &obstacles[o], o) else {
+                let Some(hit) = self.particle_contact(particles, i, obstacles, o) else {
                     continue;
                 };
                 if hit.signed_distance < nearest_distance {
@@ -334,7 +341,7 @@ impl CollisionStage {
         self.tracks.gather(*x);
         for c in 0..self.tracks.candidates.len() {
             let o = self.tracks.candidates[c] as usize;
-            let Some(hit) = contact(&*obstacles[o].shape, &self.tracks.poses[o], *x) else {
+            let Some(hit) = self.tracks.contact(obstacles, o, *x) else {
                 continue;
             };
             if hit.signed_distance < thickness {

@@ -6,6 +6,7 @@
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 
+use super::contact::{contact_prepared, Analytic, Contact, PoseF64};
 use super::obstacle::{Obstacle, ObstacleImpulse};
 use crate::math::{Pose, Rotation, Vector};
 
@@ -39,6 +40,19 @@ pub(crate) struct ObstacleTracks {
     bounds: Vec<(Vector, f32)>,
     /// Per obstacle: that sphere's centre where the obstacle is now (m).
     centers: Vec<Vector>,
+    /// Per obstacle: how its contacts are answered, and its pose now in
+    /// double precision (for the analytic contacts).
+    analytic: Vec<Analytic>,
+    poses_f64: Vec<PoseF64>,
+    /// Per particle, from the start of the step: where it was (m), and the
+    /// obstacles whose bounds come within `cache_margin` of there, as
+    /// `cached[cache_start[i]..cache_start[i + 1]]`. While a particle stays
+    /// within the margin of where it was, its candidates are these, no
+    /// broad phase needed.
+    anchors: Vec<Vector>,
+    cache_start: Vec<u32>,
+    cached: Vec<u32>,
+    cache_margin: f32,
 }
 
 impl ObstacleTracks {
@@ -64,7 +78,13 @@ impl ObstacleTracks {
             let sphere = o.shape.compute_local_bounding_sphere();
             (sphere.center, sphere.radius)
         }));
+        self.analytic.clear();
+        self.analytic
+            .extend(obstacles.iter().map(|o| Analytic::of(&*o.shape)));
         self.place_bounds();
+        self.anchors.clear();
+        self.cache_start.clear();
+        self.cached.clear();
         self.com.clear();
         self.com_velocity.clear();
         self.angvel.clear();
@@ -80,6 +100,66 @@ impl ObstacleTracks {
     /// Obstacle candidates whose bounds contain `point`, into `self.candidates`.
     pub(super) fn gather(&mut self, point: Vector) {
         self.gather_box(Aabb::new(point, point));
+    }
+
+    /// Finds, once for the step, the candidates of every particle at `x`
+    /// within `margin` metres of where it is now.
+    pub(super) fn cache_candidates(&mut self, x: &[Vector], margin: f32) {
+        self.anchors.clear();
+        self.anchors.extend_from_slice(x);
+        self.cache_margin = margin;
+        self.cache_start.clear();
+        self.cached.clear();
+        self.cache_start.push(0);
+        let reach = Vector::splat(margin);
+        for &p in x {
+            self.gather_box(Aabb::new(p - reach, p + reach));
+            self.cached.extend_from_slice(&self.candidates);
+            self.cache_start.push(self.cached.len() as u32);
+        }
+    }
+
+    /// The candidates of particle `i` at `point`, into `self.candidates`:
+    /// the same obstacles in the same order as [`ObstacleTracks::gather`],
+    /// from the step's cache while the particle is within its margin.
+    #[inline]
+    pub(super) fn gather_particle(&mut self, i: usize, point: Vector) {
+        let Some(&anchor) = self.anchors.get(i) else {
+            return self.gather(point);
+        };
+        if (point - anchor).abs().max_element() > self.cache_margin {
+            return self.gather(point);
+        }
+        self.candidates.clear();
+        let (from, to) = (
+            self.cache_start[i] as usize,
+            self.cache_start[i + 1] as usize,
+        );
+        if from == to {
+            return;
+        }
+        let here = Aabb::new(point, point);
+        for &o in &self.cached[from..to] {
+            if self.aabbs[o as usize].intersects(&here) {
+                self.candidates.push(o);
+            }
+        }
+    }
+
+    /// The contact of `point` with obstacle `o` where it is now.
+    #[inline]
+    pub(super) fn contact(
+        &self,
+        obstacles: &[Obstacle],
+        o: usize,
+        point: Vector,
+    ) -> Option<Contact> {
+        contact_prepared(
+            &*obstacles[o].shape,
+            self.analytic[o],
+            &self.poses_f64[o],
+            point,
+        )
     }
 
     /// Obstacle candidates whose bounds meet `region`, into `self.candidates`.
@@ -158,6 +238,8 @@ impl ObstacleTracks {
                 .zip(&self.poses)
                 .map(|(&(center, _), pose)| pose.transform_point(center)),
         );
+        self.poses_f64.clear();
+        self.poses_f64.extend(self.poses.iter().map(PoseF64::of));
     }
 
     /// Velocity of the material point of obstacle `o` at `point`, now.
@@ -171,5 +253,50 @@ impl ObstacleTracks {
             Some(_) => self.com_velocity[o] + self.angvel[o].cross(point - self.com[o]),
             None => obstacles[o].velocity_at(&self.poses[o], point),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A row of `count` balls 0.3 m apart, moving, and points near and far.
+    fn check(count: usize) {
+        let obstacles: Vec<Obstacle> = (0..count)
+            .map(|k| {
+                Obstacle::ball(Vector::new(0.3 * k as f32, 0.0, 0.0), 0.1)
+                    .with_velocity(Vector::new(0.0, 1.0, 0.0), Vector::ZERO)
+            })
+            .collect();
+        let mut tracks = ObstacleTracks::default();
+        tracks.begin_step(&obstacles, 0.02, 0.05);
+        let anchors: Vec<Vector> = (0..40)
+            .map(|i| Vector::new(0.07 * i as f32, 0.12 * (i % 3) as f32, 0.0))
+            .collect();
+        tracks.cache_candidates(&anchors, 0.1);
+        let mut hits = 0;
+        for (i, &a) in anchors.iter().enumerate() {
+            // Within the margin, on its edge, and beyond it.
+            for offset in [0.0, 0.05, 0.1, 0.25] {
+                for dir in [Vector::X, -Vector::Y, Vector::new(0.6, 0.6, 0.5)] {
+                    let p = a + dir * offset;
+                    tracks.gather(p);
+                    let fresh = tracks.candidates.clone();
+                    tracks.gather_particle(i, p);
+                    assert_eq!(tracks.candidates, fresh, "particle {i} at {p}");
+                    hits += fresh.len();
+                }
+            }
+        }
+        assert!(
+            hits > 0,
+            "no point was near an obstacle: the check can fail"
+        );
+    }
+
+    #[test]
+    fn cached_candidates_are_the_broad_phase_s_own() {
+        check(3); // a linear scan
+        check(20); // a bounding-volume tree
     }
 }

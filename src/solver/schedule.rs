@@ -54,6 +54,8 @@ impl ClothSolver {
         let edges = self.settings.edge_collisions;
         let reach = cloth.params.thickness + if edges { max_rest_length(cloth) } else { 0.0 };
         ws.collision.begin_step(obstacles, dt, reach, n);
+        ws.collision
+            .cache_candidates(&cloth.particles.x, candidate_margin(cloth, dt));
 
         let mut report = StepReport {
             substeps: k,
@@ -153,6 +155,26 @@ fn is_sane(cloth: &Cloth) -> bool {
     cloth.positions().iter().all(ok_x)
         && cloth.velocities().iter().all(ok_v)
         && cloth.max_strain(SpringKind::Stretch) < MAX_STRAIN
+}
+
+/// How far (m) a particle is expected to move in a step of `dt`: twice
+/// the fastest particle's distance plus a fall under gravity, and the
+/// thickness. The collision stage finds each particle's candidate obstacles
+/// within it once a step; a particle that goes further is looked up afresh.
+fn candidate_margin(cloth: &Cloth, dt: f32) -> f32 {
+    let fastest = cloth
+        .velocities()
+        .iter()
+        .map(|v| v.length_squared())
+        .fold(0.0f32, f32::max)
+        .sqrt();
+    let margin =
+        cloth.params.thickness + 2.0 * fastest * dt + cloth.params.gravity.length() * dt * dt;
+    if margin.is_finite() {
+        margin
+    } else {
+        0.0
+    }
 }
 
 /// The longest rest length among the springs sampled by edge collisions.
