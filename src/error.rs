@@ -107,6 +107,15 @@ pub enum ClothError {
         /// Substep count estimated to be stable for this cloth.
         suggested_substeps: u32,
     },
+    /// The integrator cannot carry dynamic bodies: at its large steps a body
+    /// resting on the cloth falls through it. Nothing was stepped.
+    #[error("{integrator} cannot carry dynamic bodies ({body} is one): at its large steps a body on the cloth falls through it; use xpbd or symplectic-euler, or make the body fixed or kinematic")]
+    CannotCarryBodies {
+        /// Name of the integrator.
+        integrator: &'static str,
+        /// Which body: `obstacle 3`, or a rapier collider's handle.
+        body: String,
+    },
     /// A name (scene, integrator, material, variant) is not known.
     #[error("unknown {what} '{name}': valid choices are {valid}")]
     UnknownName {
@@ -130,12 +139,12 @@ pub enum ClothError {
     Solver(String),
 }
 
-/// For an explicit integrator, the advice to switch to an implicit one.
+/// For an explicit integrator, the advice to switch to one stable at any step.
 fn implicit_advice(integrator: &str) -> &'static str {
-    if integrator == "implicit-euler" || integrator == "fast-mass-spring" {
+    if matches!(integrator, "implicit-euler" | "fast-mass-spring" | "xpbd") {
         ""
     } else {
-        ", or an implicit integrator (implicit-euler, fast-mass-spring)"
+        ", or an integrator stable at any step (xpbd; implicit-euler or fast-mass-spring without dynamic bodies)"
     }
 }
 

@@ -12,7 +12,7 @@
 //!     .horizontal(Vector::new(0.0, 0.6, 0.0))
 //!     .material(Material::cotton())
 //!     .build()?;
-//! // The solver steps the cloth (symplectic Euler by default).
+//! // The solver steps the cloth (the small-steps solver, xpbd, by default).
 //! let mut solver = ClothSolver::default();
 //! let ball = Obstacle::ball(Vector::ZERO, 0.3);
 //! for _frame in 0..60 {

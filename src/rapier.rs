@@ -217,6 +217,7 @@ impl RapierCoupling {
         crate::error::finite_vec("gravity", gravity)?;
         crate::error::non_negative("friction", self.friction)?;
         crate::error::non_negative("max obstacle speed", self.max_obstacle_speed)?;
+        self.refuse_unsafe_integrator(solver, &sets)?;
         self.drive_attachments(cloth, dt, gravity, sets.bodies)?;
         self.gather(cloth, &sets);
         let step = solver.step(cloth, dt, &self.obstacles)?;
@@ -239,6 +240,35 @@ impl RapierCoupling {
         world: &mut PhysicsWorld,
     ) -> Result<CouplingReport, ClothError> {
         self.step(&mut sim.cloth, &mut sim.solver, RapierSets::of(world))
+    }
+
+    /// Refuses an integrator that cannot carry dynamic bodies while the world
+    /// has one the cloth would meet, at the first step rather than when a
+    /// body first comes near the cloth.
+    fn refuse_unsafe_integrator(
+        &self,
+        solver: &ClothSolver,
+        sets: &RapierSets,
+    ) -> Result<(), ClothError> {
+        let integrator = solver.settings.integrator;
+        if integrator.carries_dynamic_bodies() {
+            return Ok(());
+        }
+        let dynamic = sets.colliders.iter().find(|(_, c)| {
+            c.is_enabled()
+                && (self.include_sensors || !c.is_sensor())
+                && self.groups.test(c.collision_groups())
+                && c.parent()
+                    .and_then(|h| sets.bodies.get(h))
+                    .is_some_and(|b| b.is_dynamic())
+        });
+        match dynamic {
+            Some((handle, _)) => Err(ClothError::CannotCarryBodies {
+                integrator: integrator.name(),
+                body: format!("the rapier collider {handle:?}"),
+            }),
+            None => Ok(()),
+        }
     }
 
     /// Pins every attached particle and gives it the velocity that takes it

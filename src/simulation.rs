@@ -33,7 +33,7 @@ pub struct Simulation {
 }
 
 impl Simulation {
-    /// `cloth` stepped by a solver with the default settings (symplectic Euler, automatic substeps).
+    /// `cloth` stepped by a solver with the default settings (the small-steps solver, xpbd, at automatic substeps).
     pub fn new(cloth: Cloth) -> Self {
         Simulation {
             cloth,

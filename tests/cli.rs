@@ -164,6 +164,22 @@ fn compare_runs_every_integrator_and_writes_a_plot() {
 }
 
 #[test]
+fn compare_on_the_hammock_says_which_integrators_refuse_its_boxes() {
+    let plot = std::env::temp_dir().join(format!("cloth3d-refuse-{}.png", std::process::id()));
+    let args = ["compare", "hammock", "--n", "8", "--frames", "3"];
+    let table = cloth3d_ok(&[&args[..], &["--plot", plot.to_str().unwrap()]].concat());
+    assert_eq!(table.matches("refused:").count(), 2, "{table}");
+    assert!(table.contains("use xpbd"), "{table}");
+    let json = cloth3d_ok(&[&args[..], &["--json", "--plot", plot.to_str().unwrap()]].concat());
+    for row in json_lines(&json) {
+        let large_step =
+            row["integrator"] == "implicit-euler" || row["integrator"] == "fast-mass-spring";
+        assert_eq!(row.get("refused").is_some(), large_step, "{row}");
+    }
+    let _ = std::fs::remove_file(&plot);
+}
+
+#[test]
 fn export_obj_writes_one_mesh_per_frame_that_parses_back() {
     let dir = std::env::temp_dir().join(format!("cloth3d-obj-{}", std::process::id()));
     let stdout = cloth3d_ok(&[

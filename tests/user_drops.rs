@@ -1,15 +1,17 @@
 //! What a user tries first, with a real rapier pipeline (`PhysicsWorld`
 //! steps rapier's `PhysicsPipeline`): a heavy ball dropped on a pinned
 //! sheet, small boxes dropped on a sheet, a tablecloth dropped on a table,
-//! for the integrators that run at game steps by default.
+//! with every integrator at its default substeps. The large-step ones
+//! (implicit Euler, fast mass-spring) let bodies through, so they must
+//! refuse dynamic bodies at once, saying what to use, and change nothing.
 
+use cloth3d::collision::DynamicBody;
 use cloth3d::prelude::*;
 use cloth3d::rapier::RapierCoupling;
 use rapier3d::prelude::*;
 
-/// The integrators checked here: the small-steps solver and the symplectic
-/// reference, each at its default (automatic) substeps.
-const INTEGRATORS: [Integrator; 2] = [Integrator::SymplecticEuler, Integrator::Xpbd];
+/// Every integrator, each at its default substeps.
+const INTEGRATORS: [Integrator; 7] = Integrator::ALL;
 
 /// A sheet `n`×`n`, 1 × 1 m, at height `y`, of `material`, pinned by `pins`.
 fn sheet(
@@ -28,6 +30,30 @@ fn sheet(
             .unwrap(),
     )
     .with_integrator(integrator)
+}
+
+/// Steps cloth then rapier for `frames` frames, and returns true; or, for
+/// an integrator that cannot carry dynamic bodies, checks that it refuses
+/// the first step with an error that names what to use, leaving the cloth
+/// and the bodies as they were, and returns false.
+fn run_or_refuse(sim: &mut Simulation, world: &mut PhysicsWorld, frames: usize) -> bool {
+    let integrator = sim.solver.settings.integrator;
+    if integrator.carries_dynamic_bodies() {
+        run(sim, world, frames);
+        return true;
+    }
+    let cloth = sim.positions().to_vec();
+    let bodies: Vec<Vector> = world.bodies.iter().map(|(_, b)| b.translation()).collect();
+    let err = RapierCoupling::new().step_world(sim, world).unwrap_err();
+    assert!(
+        matches!(err, ClothError::CannotCarryBodies { .. }),
+        "{integrator}: {err}"
+    );
+    assert!(err.to_string().contains("use xpbd"), "{err}");
+    assert_eq!(sim.positions(), &cloth[..], "{integrator} moved the cloth");
+    let after: Vec<Vector> = world.bodies.iter().map(|(_, b)| b.translation()).collect();
+    assert_eq!(after, bodies);
+    false
 }
 
 /// Steps cloth then rapier for `frames` frames.
@@ -55,7 +81,9 @@ fn a_heavy_ball_dropped_on_a_pinned_sheet_is_caught() {
             PinPreset::FourCorners,
             integrator,
         );
-        run(&mut sim, &mut world, 300);
+        if !run_or_refuse(&mut sim, &mut world, 300) {
+            continue;
+        }
         let body = &world.bodies[ball];
         let lowest = sim.positions().iter().map(|p| p.y).fold(f32::MAX, f32::min);
         assert!(
@@ -96,7 +124,9 @@ fn small_boxes_dropped_on_a_sheet_stay_on_it() {
             sim.pin_cell(0, c).unwrap();
             sim.pin_cell(31, c).unwrap();
         }
-        run(&mut sim, &mut world, 180);
+        if !run_or_refuse(&mut sim, &mut world, 180) {
+            continue;
+        }
         for (k, b) in boxes.iter().enumerate() {
             let body = &world.bodies[*b];
             assert!(
@@ -145,5 +175,30 @@ fn a_tablecloth_dropped_on_a_table_drapes_without_stretching() {
         );
         let lowest = sim.positions().iter().map(|p| p.y).fold(f32::MAX, f32::min);
         assert!(lowest < 0.6, "{integrator}: the skirt hangs to {lowest}");
+    }
+}
+
+/// The same refusal through the core API: a dynamic body among the obstacles.
+#[test]
+fn large_step_integrators_refuse_dynamic_obstacles_and_step_without_them() {
+    let body = DynamicBody {
+        inverse_mass: Vector::splat(0.5),
+        inverse_inertia: Mat3::IDENTITY,
+        center_of_mass: Vector::new(0.0, 0.2, 0.0),
+        acceleration: Vector::new(0.0, -9.81, 0.0),
+    };
+    let mut ball = Obstacle::ball(Vector::new(0.0, 0.2, 0.0), 0.1);
+    ball.body = Some(body);
+    let fixed = Obstacle::ball(Vector::new(0.0, -0.5, 0.0), 0.1);
+    for integrator in [Integrator::ImplicitEuler, Integrator::FastMassSpring] {
+        let mut sim = sheet(8, 0.5, Material::cotton(), PinPreset::None, integrator);
+        let err = sim
+            .step(1.0 / 60.0, &[fixed.clone(), ball.clone()])
+            .unwrap_err();
+        assert!(err.to_string().contains("obstacle 1"), "{err}");
+        assert_eq!(sim.time(), 0.0);
+        // Without the dynamic body it steps.
+        sim.step(1.0 / 60.0, std::slice::from_ref(&fixed)).unwrap();
+        assert!(sim.time() > 0.0);
     }
 }

@@ -18,6 +18,9 @@ pub struct Comparison {
     pub integrator: String,
     /// False when a step diverged (the run stops there).
     pub stable: bool,
+    /// Why the integrator refused the scene, if it did (it then has no frames).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refused: Option<String>,
     /// Substeps per frame.
     pub substeps: u32,
     /// Solver iterations per frame, for the iterative integrators.
@@ -60,6 +63,7 @@ pub fn compare_desc(desc: &SceneDesc, frames: u32) -> Result<Vec<Comparison>, Sc
         let mut row = Comparison {
             integrator: integrator.name().into(),
             stable: true,
+            refused: None,
             substeps: scene.solver.substeps_for(&scene.cloth, scene.dt),
             iterations: None,
             max_stretch: 0.0,
@@ -79,6 +83,10 @@ pub fn compare_desc(desc: &SceneDesc, frames: u32) -> Result<Vec<Comparison>, Sc
                 }
                 Err(ClothError::Diverged { .. }) => {
                     row.stable = false;
+                    break;
+                }
+                Err(e @ ClothError::CannotCarryBodies { .. }) => {
+                    row.refused = Some(e.to_string());
                     break;
                 }
                 Err(e) => return Err(e.into()),

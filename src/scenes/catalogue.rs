@@ -4,15 +4,14 @@
 use serde::{Deserialize, Serialize};
 
 use super::desc::{
-    BodyDesc, BodyKind, ClothDesc, MaterialDesc, ObstacleDesc, PinsDesc, Placement, SceneDesc,
-    ShapeDesc, Waypoint,
+    BodyDesc, BodyKind, ClothDesc, ObstacleDesc, PinsDesc, Placement, SceneDesc, ShapeDesc,
+    Waypoint,
 };
 use super::error::SceneError;
 use super::options::SceneOptions;
-use crate::cloth::{Material, PinPreset, Wind};
+use crate::cloth::{PinPreset, Wind};
 use crate::error::ClothError;
 use crate::math::Vector;
-use crate::solver::{Integrator, Substeps};
 
 /// The canonical scenes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -88,7 +87,9 @@ impl SceneKind {
     /// Frames a run lasts by default (120, or 240 for `flag`).
     pub fn default_frames(self) -> u32 {
         match self {
-            SceneKind::Flag | SceneKind::Hammock => 240,
+            SceneKind::Flag => 240,
+            // Plain cotton is lightly damped: the boxes bob a few seconds.
+            SceneKind::Hammock => 480,
             _ => 120,
         }
     }
@@ -148,18 +149,7 @@ impl SceneKind {
                     center: Vector::new(0.0, 1.0, 0.0),
                 },
             ),
-            SceneKind::Hammock => {
-                let mut c = ClothDesc::new(cols, rows, horizontal(0.5));
-                // Hammock cotton is strongly damped along its threads (above
-                // a spring's critical damping at N = 32): with plain cotton's
-                // damping the boxes bob for many seconds.
-                let mut m = Material::cotton();
-                m.name = "damped cotton".into();
-                m.stretch.damping = 3.0;
-                m.shear.damping = 3.0;
-                c.material = MaterialDesc::Custom(m);
-                c
-            }
+            SceneKind::Hammock => ClothDesc::new(cols, rows, horizontal(0.5)),
         };
         cloth.pins = PinsDesc::preset(match self {
             SceneKind::Flag => PinPreset::FlagColumn,
@@ -171,13 +161,6 @@ impl SceneKind {
         let mut desc = SceneDesc::new(self.name(), cloth);
         desc.description = self.description().to_string();
         desc.frames = self.default_frames();
-        if self == SceneKind::Hammock {
-            // Strong damping is what the implicit integrator is for; four
-            // substeps keep the boxes' landing from stretching the cloth
-            // through them (the boxes' contacts are not constraints of its solve).
-            desc.solver.integrator = Integrator::ImplicitEuler;
-            desc.solver.substeps = Substeps::Fixed(4);
-        }
         match self {
             SceneKind::Drape => desc.obstacles.push(ObstacleDesc::fixed(
                 ShapeDesc::Ball { radius: 0.3 },

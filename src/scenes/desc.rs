@@ -564,7 +564,7 @@ pub struct AttachmentDesc {
 
 impl SceneDesc {
     /// A scene with `cloth` and the defaults of SCENES.md: gravity, 1/60 s
-    /// frames, 120 frames, symplectic Euler with automatic substeps,
+    /// frames, 120 frames, the small-steps solver (xpbd) with automatic substeps,
     /// thickness 1 cm, friction 0.5, no wind, no obstacle.
     pub fn new(name: impl Into<String>, cloth: ClothDesc) -> Self {
         Self {

@@ -11,8 +11,8 @@ use crate::solver::{Integrator, Preconditioner, Substeps};
 pub struct SceneOptions {
     /// Particles along a row; rows follow the scene's aspect ratio.
     pub n: Option<usize>,
-    /// The integrator (default: the scene's, symplectic Euler but for
-    /// `hammock`'s implicit Euler); without `substeps`, it brings its own
+    /// The integrator (default: the scene's, the small-steps solver `xpbd`);
+    /// without `substeps`, it brings its own
     /// default substeps ([`Integrator::default_substeps`]).
     pub integrator: Option<Integrator>,
     /// The material (default: cotton).

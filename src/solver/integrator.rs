@@ -84,6 +84,14 @@ impl Integrator {
         }
     }
 
+    /// True for the methods that keep dynamic bodies on the cloth. The
+    /// large-step ones (implicit Euler, fast mass-spring) let a heavy body
+    /// through at their default steps, so they refuse dynamic bodies
+    /// ([`crate::ClothError::CannotCarryBodies`]).
+    pub fn carries_dynamic_bodies(self) -> bool {
+        !matches!(self, Integrator::ImplicitEuler | Integrator::FastMassSpring)
+    }
+
     /// True for the methods that take contacts and friction into their own
     /// solve: contacts are detected ahead of each of their substeps.
     pub fn solves_contacts(self) -> bool {

@@ -29,7 +29,8 @@ impl ClothSolver {
     /// [`MAX_SPEED`], a distance over [`MAX_DISTANCE`], a stretch over
     /// [`MAX_STRAIN`]), the cloth is put back as it was before the step and
     /// [`ClothError::Diverged`] says which integrator diverged and how many
-    /// substeps would be stable.
+    /// substeps would be stable. An integrator that cannot carry dynamic
+    /// bodies refuses obstacles that are ([`ClothError::CannotCarryBodies`]).
     pub fn step(
         &mut self,
         cloth: &mut Cloth,
@@ -42,6 +43,15 @@ impl ClothSolver {
         cloth.material.validate()?;
         for (i, o) in obstacles.iter().enumerate() {
             o.validate(i)?;
+        }
+        let integrator = self.settings.integrator;
+        if !integrator.carries_dynamic_bodies() {
+            if let Some(i) = obstacles.iter().position(|o| o.body.is_some()) {
+                return Err(ClothError::CannotCarryBodies {
+                    integrator: integrator.name(),
+                    body: format!("obstacle {i}"),
+                });
+            }
         }
         let k = self.substeps_for(cloth, dt);
         let h = dt / k as f32;

@@ -16,7 +16,8 @@ use crate::error::{positive, ClothError};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SolverSettings {
-    /// The time integrator.
+    /// The time integrator (default: [`Integrator::Xpbd`], stable at any
+    /// step and safe with dynamic bodies).
     pub integrator: Integrator,
     /// How each frame step is split.
     #[serde(deserialize_with = "super::substeps::de_substeps")]
@@ -53,7 +54,7 @@ pub struct SolverSettings {
 impl Default for SolverSettings {
     fn default() -> Self {
         Self {
-            integrator: Integrator::SymplecticEuler,
+            integrator: Integrator::Xpbd,
             substeps: Substeps::Auto,
             newton_iterations: 2,
             cg_max_iterations: 100,

@@ -70,7 +70,11 @@ pub fn compare_command(args: CompareArgs) -> ExitCode {
                 out,
                 "{:<18} {:<8} {:>8} {:>10} {:>9.2}% {:>12.4} J {:>11.2}  #{r:02x}{g:02x}{b:02x}",
                 row.integrator,
-                if row.stable { "yes" } else { "DIVERGED" },
+                match (&row.refused, row.stable) {
+                    (Some(_), _) => "refused",
+                    (None, true) => "yes",
+                    (None, false) => "DIVERGED",
+                },
                 row.substeps,
                 row.iterations
                     .map(|i| i.to_string())
@@ -79,6 +83,11 @@ pub fn compare_command(args: CompareArgs) -> ExitCode {
                 row.energy_change,
                 1000.0 * row.frame_wall_s,
             );
+        }
+        for row in &rows {
+            if let Some(reason) = &row.refused {
+                outln!(out, "refused: {reason}");
+            }
         }
         outln!(
             out,
