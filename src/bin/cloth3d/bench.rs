@@ -163,7 +163,7 @@ fn bench_rows(args: &BenchArgs) -> ExitCode {
     if !args.json {
         let lines = cloth3d::cli::bench::target_lines(&rows);
         if !lines.is_empty() {
-            emit("\ntargets (issue 7):\n");
+            emit("\ntargets (issues 7 and 16):\n");
             for line in lines {
                 emit(&format!("  {line}\n"));
             }
