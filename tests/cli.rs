@@ -72,6 +72,12 @@ fn list_names_every_choice() {
     ] {
         assert!(stdout.contains(name), "list lacks {name}");
     }
+    for line in [
+        "xpbd               (default)",
+        "implicit-euler     (refuses dynamic bodies)",
+    ] {
+        assert!(stdout.contains(line), "list lacks '{line}':\n{stdout}");
+    }
 }
 
 #[test]

@@ -27,8 +27,18 @@ pub fn list() {
         outln!(out);
     }
     outln!(out, "integrators:");
+    let default = cloth3d::solver::SolverSettings::default().integrator;
     for i in Integrator::ALL {
-        outln!(out, "  {}", i.name());
+        let notes = [
+            (i == default).then_some("default"),
+            (!i.carries_dynamic_bodies()).then_some("refuses dynamic bodies"),
+        ];
+        let notes: Vec<&str> = notes.into_iter().flatten().collect();
+        if notes.is_empty() {
+            outln!(out, "  {}", i.name());
+        } else {
+            outln!(out, "  {:<18} ({})", i.name(), notes.join("; "));
+        }
     }
     outln!(out, "materials:");
     for m in Material::presets() {
