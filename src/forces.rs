@@ -154,6 +154,8 @@ pub(crate) fn add_wind_forces(triangles: &[[u32; 3]], wind: &Wind, x: &[Vector],
 pub(crate) struct ForceModel<'a> {
     pub springs: &'a Springs,
     pub spring_params: [SpringParams; 3],
+    /// The longest a stretch spring may be over its rest length (infinite: no limit).
+    pub stretch_limit: f32,
     pub triangles: &'a [[u32; 3]],
     pub mass: &'a [f32],
     pub inv_mass: &'a [f32],
@@ -196,6 +198,7 @@ impl<'a> ForceModel<'a> {
         ForceModel {
             springs: &topology.springs,
             spring_params: SpringKind::ALL.map(|k| material.params(k)),
+            stretch_limit: material.stretch_limit_factor(),
             triangles: &topology.triangles,
             mass: masses.mass,
             inv_mass: masses.inv_mass,

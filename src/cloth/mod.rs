@@ -17,7 +17,7 @@ mod topology;
 pub use builder::{ClothBuilder, MassSpec};
 pub use cloth::Cloth;
 pub use energy::Energy;
-pub use material::{Material, SpringParams};
+pub use material::{Material, SpringParams, WOVEN_STRETCH_LIMIT};
 pub use particles::Particles;
 pub use physics::{PhysicsParams, Wind};
 pub use pins::PinPreset;

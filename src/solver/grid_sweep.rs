@@ -236,6 +236,52 @@ fn sweep_portable(plan: &mut GridPlan, lanes: &mut Lanes, compliance: &[Complian
     }
 }
 
+/// The material's stretch limit on a grid cloth: the stretch springs'
+/// runs, [`super::strain_limit::PASSES`] Gauss–Seidel passes at most, each
+/// spring longer than `factor` times its rest length shortened to it.
+/// Returns the springs shortened.
+pub(crate) fn limit_stretch(plan: &GridPlan, lanes: &mut Lanes, factor: f32) -> u32 {
+    if !factor.is_finite() {
+        return 0;
+    }
+    let mut shortened = 0;
+    for _ in 0..super::strain_limit::PASSES {
+        let mut over = 0;
+        for pass in plan.passes.iter().filter(|p| p.kind == SpringKind::Stretch) {
+            for seg in &pass.segments {
+                for t in 0..seg.len as usize {
+                    let (a, b) = (seg.a as usize + t, seg.b as usize + t);
+                    let d = [
+                        lanes.x[b] - lanes.x[a],
+                        lanes.y[b] - lanes.y[a],
+                        lanes.z[b] - lanes.z[a],
+                    ];
+                    let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                    let excess = len - pass.rest[a] * factor;
+                    let w = lanes.w[a] + lanes.w[b];
+                    if !(excess > 0.0) || w == 0.0 {
+                        continue;
+                    }
+                    let s = excess / (w * len);
+                    let (sa, sb) = (lanes.w[a] * s, lanes.w[b] * s);
+                    lanes.x[a] += d[0] * sa;
+                    lanes.y[a] += d[1] * sa;
+                    lanes.z[a] += d[2] * sa;
+                    lanes.x[b] -= d[0] * sb;
+                    lanes.y[b] -= d[1] * sb;
+                    lanes.z[b] -= d[2] * sb;
+                    over += 1;
+                }
+            }
+        }
+        shortened += over;
+        if over == 0 {
+            break;
+        }
+    }
+    shortened
+}
+
 /// One spring's projection: new positions of its ends `a` and `b` (m),
 /// given the motion of `b` relative to `a` since the substep's start, the
 /// inverse masses `w` of the ends, the rest length (0: no spring here) and

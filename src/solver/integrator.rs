@@ -84,6 +84,12 @@ impl Integrator {
         }
     }
 
+    /// True for the methods that hold the material's stretch limit at the
+    /// end of their own substep (the others get it from the schedule).
+    pub fn limits_stretch_itself(self) -> bool {
+        self == Integrator::Xpbd
+    }
+
     /// True for the methods that keep dynamic bodies on the cloth. The
     /// large-step ones (implicit Euler, fast mass-spring) let a heavy body
     /// through at their default steps, so they refuse dynamic bodies

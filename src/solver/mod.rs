@@ -21,6 +21,7 @@ mod settings;
 mod spring_space;
 mod stability;
 mod state;
+mod strain_limit;
 mod substep;
 mod substeps;
 mod symplectic_euler;

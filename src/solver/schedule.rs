@@ -3,8 +3,9 @@
 //! ```text
 //! validate → substeps k, h = dt / k → back up → obstacle bounds over the step
 //! per substep:  obstacle motion → contact detection (solvers that solve
-//!               contacts) → integrate → resolve contacts (with the friction
-//!               policy the integrator handed back)
+//!               contacts) → integrate → stretch limit (solvers that do not
+//!               hold it in their own substep) → resolve contacts (with the
+//!               friction policy the integrator handed back)
 //! divergence check → roll back and report, or commit the time
 //! ```
 
@@ -12,6 +13,7 @@ use super::cloth_solver::ClothSolver;
 use super::integrate::integrate;
 use super::report::{StepReport, MAX_DISTANCE, MAX_SPEED, MAX_STRAIN};
 use super::stability::stable_substeps;
+use super::strain_limit::limit_stretch;
 use super::substep::Substep;
 use crate::cloth::{Cloth, Particles, SpringKind};
 use crate::collision::Obstacle;
@@ -121,6 +123,22 @@ impl ClothSolver {
                 }
             };
             report.iterations += outcome.iterations;
+            // The stretch limit, for the integrators that do not hold it in
+            // their own substep: before the contacts, so that the contacts
+            // win where the two disagree (a particle pulled towards a pin
+            // behind a ball stays outside the ball); velocities lose what
+            // still stretches a limited spring (strain_limit.rs says why not
+            // the move over the substep).
+            if !self.settings.integrator.limits_stretch_itself() {
+                let p = &mut cloth.particles;
+                limit_stretch(
+                    &cloth.topology.springs,
+                    &p.inv_mass,
+                    &mut p.x,
+                    Some(&mut p.v),
+                    cloth.material.stretch_limit_factor(),
+                );
+            }
             // Resolve contacts, by the friction policy the integrator handed back.
             report.contacts += ws.collision.resolve(
                 &ctx,

@@ -10,7 +10,8 @@
 //! `x += h v`; for each spring, `C = |x_b − x_a| − L`, `α = 1/(k h²)`,
 //! `γ = c/(k h)`, `Δλ = −(C + γ n·(Δx_b − Δx_a)) / ((1 + γ)(w_a + w_b) + α)`
 //! with `Δx` the motion since the substep's start, and `x_a −= w_a Δλ n`,
-//! `x_b += w_b Δλ n`; then `v = (x − x_start)/h`, computed as the predicted
+//! `x_b += w_b Δλ n`; then the material's stretch limit, if it has one
+//! (`solver/strain_limit.rs`); then `v = (x − x_start)/h`, computed as the predicted
 //! velocity plus the sweep's correction over `h` (the same in exact
 //! arithmetic, but in `f32` a substep's motion `v h` can be smaller than the
 //! spacing of floats at the position: `x − x_start` would then read zero and
@@ -22,7 +23,8 @@ use crate::cloth::{Grid, SpringKind, Springs};
 use crate::forces::add_wind_forces;
 use crate::math::Vector;
 
-use super::grid_sweep::{sweep, Compliance, GridPlan, Lanes};
+use super::grid_sweep::{limit_stretch, sweep, Compliance, GridPlan, Lanes};
+use super::strain_limit;
 use super::substep::Substep;
 
 /// Scratch of the small-steps solver.
@@ -125,6 +127,7 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
             for _ in 0..sub.settings.xpbd_iterations {
                 sweep(plan, l, &compliance);
             }
+            limit_stretch(plan, l, model.stretch_limit);
             // Velocities from the motion: `x` still holds the prediction.
             for i in 0..n {
                 let lane = plan.lane(i);
@@ -141,6 +144,8 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
             for _ in 0..sub.settings.xpbd_iterations {
                 sweep_colour_classes(sub, x, &ws.start, &mut ws.lambda, &compliance);
             }
+            let (springs, w) = (model.springs, model.inv_mass);
+            strain_limit::limit_stretch(springs, w, x, None, model.stretch_limit);
             for i in 0..n {
                 let correction = x[i] - ws.predicted[i];
                 correct_velocity(&mut v[i], correction, model.inv_mass[i], h);

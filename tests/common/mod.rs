@@ -3,9 +3,10 @@
 
 use cloth3d::prelude::*;
 
-/// A material whose stretch springs have stiffness `k` (N/m) and damping `c` (N·s/m).
+/// A material whose stretch springs have stiffness `k` (N/m) and damping
+/// `c` (N·s/m), and no stretch limit: springs alone.
 pub fn spring_material(k: f32, c: f32) -> Material {
-    let mut m = Material::cotton();
+    let mut m = Material::cotton().with_stretch_limit(None);
     m.stretch = SpringParams::new(k, c);
     m
 }

@@ -42,9 +42,12 @@ pub fn list() {
     }
     outln!(out, "materials:");
     for m in Material::presets() {
+        let limit = m
+            .stretch_limit
+            .map_or(String::new(), |e| format!(", stretch limit {}%", 100.0 * e));
         outln!(
             out,
-            "  {:<8} stretch {} N/m, shear {} N/m, bend {} N/m, {} kg/m²",
+            "  {:<8} stretch {} N/m, shear {} N/m, bend {} N/m, {} kg/m²{limit}",
             m.name,
             m.stretch.stiffness,
             m.shear.stiffness,
