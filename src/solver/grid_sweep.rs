@@ -259,7 +259,7 @@ pub(crate) fn limit_stretch(plan: &GridPlan, lanes: &mut Lanes, factor: f32) -> 
                     let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
                     let excess = len - pass.rest[a] * factor;
                     let w = lanes.w[a] + lanes.w[b];
-                    if !(excess > 0.0) || w == 0.0 {
+                    if excess.is_nan() || excess <= 0.0 || w == 0.0 {
                         continue;
                     }
                     let s = excess / (w * len);

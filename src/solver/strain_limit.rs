@@ -44,7 +44,7 @@ pub(crate) fn limit_stretch(
             let d = x[j] - x[i];
             let len = d.length();
             let excess = len - rest[s] * factor;
-            if !(excess > 0.0) || w == 0.0 {
+            if excess.is_nan() || excess <= 0.0 || w == 0.0 {
                 continue;
             }
             let step = d * (excess / (w * len));
