@@ -89,12 +89,6 @@ impl PoseF64 {
     }
 }
 
-impl Default for PoseF64 {
-    fn default() -> Self {
-        PoseF64::of(&Pose::IDENTITY)
-    }
-}
-
 /// [`contact`] with the shape's kind and the pose in double precision
 /// already found: the collision stage's per-particle query.
 #[inline]
