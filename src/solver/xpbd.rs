@@ -124,10 +124,11 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
                 (l.sx[lane], l.sy[lane], l.sz[lane]) = (s.x, s.y, s.z);
                 l.w[lane] = model.inv_mass[i];
             }
+            let threads = sub.settings.parallel;
             for _ in 0..sub.settings.xpbd_iterations {
-                sweep(plan, l, &compliance);
+                sweep(plan, l, &compliance, threads);
             }
-            limit_stretch(plan, l, model.stretch_limit);
+            limit_stretch(plan, l, model.stretch_limit, threads);
             // Velocities from the motion: `x` still holds the prediction.
             for i in 0..n {
                 let lane = plan.lane(i);
