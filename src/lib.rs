@@ -37,6 +37,7 @@ pub mod export;
 pub mod forces;
 pub mod math;
 pub mod metrics;
+mod parallel;
 pub mod rapier;
 pub mod scenes;
 pub mod simulation;

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 /// The library's top-level modules, lowest layer first; a module may import
 /// only modules of its own or a lower layer.
 const LAYERS: &[&[&str]] = &[
-    &["math", "error"],
+    &["math", "error", "parallel"],
     &["cloth", "context"],
     &["forces", "collision"],
     &["integrators"],

@@ -5,6 +5,7 @@
 
 use super::response::{respond, Response};
 use crate::math::Vector;
+use crate::parallel::Disjoint;
 
 /// No obstacle.
 pub(super) const NONE: u32 = u32::MAX;
@@ -25,6 +26,62 @@ pub struct ParticleContact {
     pub gap: f32,
     /// Coulomb friction coefficient of the surface.
     pub friction: f32,
+}
+
+/// A [`ContactSet`] that threads share, each taking a disjoint range of
+/// particles ([`SharedContacts::range`]).
+#[derive(Clone, Copy)]
+pub(super) struct SharedContacts<'a> {
+    touching: Disjoint<'a, bool>,
+    obstacle: Disjoint<'a, u32>,
+    immovable: Disjoint<'a, bool>,
+    normal: Disjoint<'a, Vector>,
+    surface_velocity: Disjoint<'a, Vector>,
+}
+
+/// The contacts of a range of particles, indexed from its first.
+pub(super) struct ContactRange<'a> {
+    touching: &'a mut [bool],
+    obstacle: &'a mut [u32],
+    immovable: &'a mut [bool],
+    normal: &'a mut [Vector],
+    surface_velocity: &'a mut [Vector],
+}
+
+impl<'a> SharedContacts<'a> {
+    /// The contacts of particles `range`.
+    ///
+    /// # Safety
+    /// No other range overlapping `range` may be in use meanwhile.
+    pub(super) unsafe fn range(self, range: std::ops::Range<usize>) -> ContactRange<'a> {
+        // SAFETY: exclusive by the caller's promise.
+        unsafe {
+            ContactRange {
+                touching: self.touching.range(range.clone()),
+                obstacle: self.obstacle.range(range.clone()),
+                immovable: self.immovable.range(range.clone()),
+                normal: self.normal.range(range.clone()),
+                surface_velocity: self.surface_velocity.range(range),
+            }
+        }
+    }
+}
+
+impl ContactRange<'_> {
+    /// Particle `k` of the range no longer touches anything.
+    pub(super) fn clear(&mut self, k: usize) {
+        self.touching[k] = false;
+    }
+
+    /// Particle `k` of the range touches: everything but the gap and the
+    /// friction, which only detection ahead of a substep sets.
+    pub(super) fn touch(&mut self, k: usize, c: &ParticleContact) {
+        self.touching[k] = true;
+        self.obstacle[k] = c.obstacle;
+        self.immovable[k] = c.immovable;
+        self.normal[k] = c.normal;
+        self.surface_velocity[k] = c.surface_velocity;
+    }
 }
 
 /// Per particle: its contact, if it has one.
@@ -101,20 +158,26 @@ impl ContactSet {
         self.touching[i] = false;
     }
 
-    /// Particle `i` touches: everything but the gap, which only detection ahead of a substep sets.
-    pub(super) fn touch(&mut self, i: usize, c: &ParticleContact) {
+    /// Particle `i` will reach an obstacle within the substep (or touches it): all of the contact.
+    pub(super) fn detect(&mut self, i: usize, c: &ParticleContact) {
         self.touching[i] = true;
         self.obstacle[i] = c.obstacle;
         self.immovable[i] = c.immovable;
         self.normal[i] = c.normal;
         self.surface_velocity[i] = c.surface_velocity;
-    }
-
-    /// Particle `i` will reach an obstacle within the substep (or touches it): all of the contact.
-    pub(super) fn detect(&mut self, i: usize, c: &ParticleContact) {
-        self.touch(i, c);
         self.gap[i] = c.gap;
         self.friction[i] = c.friction;
+    }
+
+    /// The contacts, for threads that each take a disjoint range of particles.
+    pub(super) fn shared(&mut self) -> SharedContacts<'_> {
+        SharedContacts {
+            touching: Disjoint::new(&mut self.touching),
+            obstacle: Disjoint::new(&mut self.obstacle),
+            immovable: Disjoint::new(&mut self.immovable),
+            normal: Disjoint::new(&mut self.normal),
+            surface_velocity: Disjoint::new(&mut self.surface_velocity),
+        }
     }
 
     /// How particle `i`'s contact responds over a substep of `h` seconds,

@@ -4,19 +4,27 @@
 //! solve, and resolves them after the substep.
 
 use parry3d::bounding_volume::Aabb;
-use parry3d::query::Ray;
 
-use super::contact::Contact;
 use super::contact_set::{ContactSet, ParticleContact, NONE};
 use super::obstacle::{Obstacle, ObstacleImpulse};
+use super::particle_pass::{BlockOut, BlockScratch, ParticlePass, BLOCK, CONTACT_SLACK};
 use super::response::FrictionPolicy;
 use super::tracks::ObstacleTracks;
 use crate::cloth::{Particles, SpringKind, Springs};
 use crate::context::StepContext;
 use crate::math::Vector;
+use crate::parallel::{sum_over_count, Disjoint};
 
-/// Distance (m) beyond the thickness within which a particle still counts as touching.
-const CONTACT_SLACK: f32 = 1.0e-5;
+/// How [`CollisionStage::resolve`] goes about a substep's contacts.
+#[derive(Debug, Clone, Copy)]
+pub struct ResolveOptions {
+    /// Whether Coulomb friction acts here or was decided in the solve.
+    pub friction: FrictionPolicy,
+    /// Keep stretch and shear springs out of the obstacles too.
+    pub edges: bool,
+    /// Resolve blocks of particles on rayon's threads (`parallel` feature).
+    pub threads: bool,
+}
 
 /// Two contact normals closer than this (cosine) lie on one smooth stretch of
 /// surface, where a spring between two particles outside it stays outside.
@@ -35,6 +43,8 @@ pub struct CollisionStage {
     pub(super) distance: Vec<f32>,
     /// Per particle: moved by the edge pass in this substep.
     pub(super) edge_moved: Vec<bool>,
+    /// Per block of the particle pass: its scratch.
+    blocks: Vec<BlockScratch>,
 }
 
 impl CollisionStage {
@@ -75,49 +85,6 @@ impl CollisionStage {
     /// Records momentum `j` (N·s) handed to obstacle `o` at `point` by a solver.
     pub fn add_impulse(&mut self, o: usize, point: Vector, j: Vector) {
         self.tracks.add_impulse(o, point, j);
-    }
-
-    /// The contact of particle `i` with obstacle `o`. A particle that ended the
-    /// substep inside but started it outside (relative to the moving
-    /// obstacle) is traced along its relative path, so it is pushed back out
-    /// through the face it entered rather than through the nearest one: fast
-    /// obstacles do not pass through the cloth.
-    fn particle_contact(
-        &self,
-        p: &Particles,
-        i: usize,
-        obstacles: &[Obstacle],
-        o: usize,
-    ) -> Option<Contact> {
-        let (obstacle, pose) = (&obstacles[o], &self.tracks.poses[o]);
-        let c = self.tracks.contact(obstacles, o, p.x[i])?;
-        if c.signed_distance >= 0.0 {
-            return Some(c);
-        }
-        let prev = &self.tracks.prev_poses[o];
-        let from = prev.inverse_transform_point(p.x_prev[i]);
-        if obstacle.shape.contains_local_point(from) {
-            return Some(c);
-        }
-        let to = pose.inverse_transform_point(p.x[i]);
-        let ray = Ray::new(from, to - from);
-        match obstacle
-            .shape
-            .cast_local_ray_and_get_normal(&ray, 1.0, true)
-        {
-            Some(hit) if hit.normal.is_finite() && hit.normal.length_squared() > 0.5 => {
-                let entry = ray.point_at(hit.time_of_impact);
-                let n = hit.normal.normalize();
-                // Depth below the entry face, along its normal.
-                let depth = (to - entry).dot(n).min(0.0);
-                Some(Contact {
-                    point: pose.transform_point(to - n * depth),
-                    normal: pose.transform_vector(n),
-                    signed_distance: depth,
-                })
-            }
-            _ => Some(c),
-        }
     }
 
     /// Finds which free particles touch an obstacle now (within the thickness
@@ -212,66 +179,83 @@ impl CollisionStage {
 
     /// Resolves every contact after a substep, with the obstacles where
     /// [`CollisionStage::advance`] put them; with `edges`, stretch and shear
-    /// springs too. The solver's `friction` policy says whether Coulomb
+    /// springs too (`options.edges`). The solver's friction policy says whether Coulomb
     /// friction acts on the touching particles here or was already decided
     /// inside its solve (then they are only put back on the surface).
-    /// Returns the particle contacts resolved.
+    /// The particles are resolved block by block, on rayon's threads with
+    /// `threads`, and the blocks' impulses summed in particle order: the
+    /// bits are those of one thread. Returns the particle contacts resolved.
     pub fn resolve(
         &mut self,
         ctx: &StepContext,
         particles: &mut Particles,
         springs: &Springs,
         obstacles: &[Obstacle],
-        friction: FrictionPolicy,
-        edges: bool,
+        options: ResolveOptions,
     ) -> u32 {
         if obstacles.is_empty() {
             return 0;
         }
         let thickness = ctx.thickness;
-        let far = self.tracks.reach.max(thickness + CONTACT_SLACK);
-        let mut contacts = 0;
-        for i in 0..particles.len() {
-            self.nearest[i] = NONE;
-            self.contacts.clear(i);
-            self.tracks.gather_particle(i, particles.x[i]);
-            let mut nearest_distance = f32::INFINITY;
-            for c in 0..self.tracks.candidates.len() {
-                let o = self.tracks.candidates[c] as usize;
-                // Beyond the reach of the contact and the edge pass: as if
-                // it were not a candidate (the edge pass then takes the
-                // particle's distance to be the reach, less than it is).
-                if self.tracks.surely_beyond(o, particles.x[i], far) {
-                    continue;
-                }
-                let Some(hit) = self.particle_contact(particles, i, obstacles, o) else {
-                    continue;
-                };
-                if hit.signed_distance < nearest_distance {
-                    nearest_distance = hit.signed_distance;
-                    self.nearest[i] = o as u32;
-                    self.normal[i] = hit.normal;
-                    // Resolution below leaves a particle at least the thickness out.
-                    self.distance[i] = if particles.inv_mass[i] != 0.0 {
-                        hit.signed_distance.max(thickness)
-                    } else {
-                        hit.signed_distance
-                    };
-                }
-                // A hair of slack keeps particles a solver left exactly at the
-                // thickness in contact, so friction still acts on them.
-                if particles.inv_mass[i] != 0.0 && hit.signed_distance < thickness + CONTACT_SLACK {
-                    self.resolve_particle(ctx, particles, i, obstacles, (o, hit), friction);
-                    contacts += 1;
-                }
+        let n = particles.len();
+        let blocks = n.div_ceil(BLOCK);
+        self.blocks.resize_with(blocks, BlockScratch::default);
+        let Particles {
+            x,
+            v,
+            x_prev,
+            mass,
+            inv_mass,
+        } = particles;
+        let pass = ParticlePass {
+            ctx,
+            tracks: &self.tracks,
+            obstacles,
+            x_prev,
+            mass,
+            inv_mass,
+            friction: options.friction,
+            far: self.tracks.reach.max(thickness + CONTACT_SLACK),
+        };
+        let (x, v) = (Disjoint::new(&mut x[..]), Disjoint::new(&mut v[..]));
+        let nearest = Disjoint::new(&mut self.nearest[..]);
+        let normal = Disjoint::new(&mut self.normal[..]);
+        let distance = Disjoint::new(&mut self.distance[..]);
+        let contact_set = self.contacts.shared();
+        let scratch = Disjoint::new(&mut self.blocks[..]);
+        let contacts = sum_over_count(blocks, options.threads, |b| {
+            let range = b * BLOCK..((b + 1) * BLOCK).min(n);
+            // SAFETY: blocks are disjoint ranges of particles, and block `b`
+            // alone uses scratch `b`.
+            let (mut out, scratch) = unsafe {
+                (
+                    BlockOut {
+                        x: x.range(range.clone()),
+                        v: v.range(range.clone()),
+                        nearest: nearest.range(range.clone()),
+                        normal: normal.range(range.clone()),
+                        distance: distance.range(range.clone()),
+                        contacts: contact_set.range(range.clone()),
+                    },
+                    &mut scratch.range(b..b + 1)[0],
+                )
+            };
+            pass.block(range, &mut out, scratch)
+        });
+        // The momentum handed to the obstacles, in particle order.
+        for block in &mut self.blocks {
+            for handed in block.impulses.drain(..) {
+                let imp = &mut self.tracks.impulses[handed.obstacle as usize];
+                imp.linear += handed.j;
+                imp.angular_about_origin += handed.point.cross(handed.j);
+                imp.contacts += 1;
             }
         }
-        if edges {
+        if options.edges {
             self.resolve_edges(particles, springs, obstacles, thickness);
         }
         contacts
     }
-
     /// The edge pass: stretch and shear springs whose ends lie near an
     /// obstacle are kept out of it, then every particle it moved is pushed
     /// back out of every obstacle.
@@ -357,55 +341,5 @@ impl CollisionStage {
             }
         }
         moved
-    }
-
-    /// Pushes particle `i` out of obstacle `o` (the `hit` with it) and, by
-    /// the solver's policy, applies friction.
-    fn resolve_particle(
-        &mut self,
-        ctx: &StepContext,
-        p: &mut Particles,
-        i: usize,
-        obstacles: &[Obstacle],
-        (o, hit): (usize, Contact),
-        friction: FrictionPolicy,
-    ) {
-        let obstacle = &obstacles[o];
-        let n = hit.normal;
-        let new_x = p.x[i] + n * (ctx.thickness - hit.signed_distance).max(0.0);
-        let surface_v = self.tracks.surface_velocity_of(obstacles, o, new_x);
-        let v_old = p.v[i];
-        let rel = v_old - surface_v;
-        let vn = rel.dot(n);
-        // The normal velocity taken away bounds what friction may take away.
-        let removed = (-vn).max(0.0);
-        let rel_t = rel - n * vn;
-        let slip = rel_t.length();
-        let limit = obstacle.friction * removed;
-        let rel_t_new = match friction {
-            FrictionPolicy::AlreadySolved => rel_t,
-            FrictionPolicy::Apply if slip <= limit => Vector::ZERO,
-            FrictionPolicy::Apply => rel_t * (1.0 - limit / slip),
-        };
-        let v_new = surface_v + n * vn.max(0.0) + rel_t_new;
-        // Undo the slip friction forbade during this substep.
-        p.x[i] = new_x + (rel_t_new - rel_t) * ctx.h;
-        p.v[i] = v_new;
-        self.contacts.touch(
-            i,
-            &ParticleContact {
-                obstacle: o as u32,
-                normal: n,
-                surface_velocity: surface_v,
-                immovable: obstacle.body.is_none(),
-                gap: 0.0,
-                friction: obstacle.friction,
-            },
-        );
-        let j = (v_old - v_new) * p.mass[i];
-        let imp = &mut self.tracks.impulses[o];
-        imp.linear += j;
-        imp.angular_about_origin += new_x.cross(j);
-        imp.contacts += 1;
     }
 }

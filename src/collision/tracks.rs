@@ -119,18 +119,18 @@ impl ObstacleTracks {
         }
     }
 
-    /// The candidates of particle `i` at `point`, into `self.candidates`:
-    /// the same obstacles in the same order as [`ObstacleTracks::gather`],
-    /// from the step's cache while the particle is within its margin.
+    /// The candidates of particle `i` at `point`, into `out`: the same
+    /// obstacles in the same order as [`ObstacleTracks::gather`], from the
+    /// step's cache while the particle is within its margin.
     #[inline]
-    pub(super) fn gather_particle(&mut self, i: usize, point: Vector) {
+    pub(super) fn gather_particle(&self, i: usize, point: Vector, out: &mut Vec<u32>) {
         let Some(&anchor) = self.anchors.get(i) else {
-            return self.gather(point);
+            return self.gather_box_into(Aabb::new(point, point), out);
         };
         if (point - anchor).abs().max_element() > self.cache_margin {
-            return self.gather(point);
+            return self.gather_box_into(Aabb::new(point, point), out);
         }
-        self.candidates.clear();
+        out.clear();
         let (from, to) = (
             self.cache_start[i] as usize,
             self.cache_start[i + 1] as usize,
@@ -141,7 +141,7 @@ impl ObstacleTracks {
         let here = Aabb::new(point, point);
         for &o in &self.cached[from..to] {
             if self.aabbs[o as usize].intersects(&here) {
-                self.candidates.push(o);
+                out.push(o);
             }
         }
     }
@@ -164,10 +164,17 @@ impl ObstacleTracks {
 
     /// Obstacle candidates whose bounds meet `region`, into `self.candidates`.
     pub(super) fn gather_box(&mut self, region: Aabb) {
-        self.candidates.clear();
+        let mut out = std::mem::take(&mut self.candidates);
+        self.gather_box_into(region, &mut out);
+        self.candidates = out;
+    }
+
+    /// Obstacle candidates whose bounds meet `region`, into `out`.
+    fn gather_box_into(&self, region: Aabb, out: &mut Vec<u32>) {
+        out.clear();
         match &self.bvh {
-            Some(bvh) => self.candidates.extend(bvh.intersect_aabb(&region)),
-            None => self.candidates.extend(
+            Some(bvh) => out.extend(bvh.intersect_aabb(&region)),
+            None => out.extend(
                 self.aabbs
                     .iter()
                     .enumerate()
@@ -282,8 +289,9 @@ mod tests {
                     let p = a + dir * offset;
                     tracks.gather(p);
                     let fresh = tracks.candidates.clone();
-                    tracks.gather_particle(i, p);
-                    assert_eq!(tracks.candidates, fresh, "particle {i} at {p}");
+                    let mut cached = Vec::new();
+                    tracks.gather_particle(i, p, &mut cached);
+                    assert_eq!(cached, fresh, "particle {i} at {p}");
                     hits += fresh.len();
                 }
             }

@@ -16,6 +16,7 @@
 //! more stretched: the boundary springs then lag a whole sweep.)
 
 use crate::cloth::{Grid, SpringKind, Springs};
+use crate::parallel::{sum_over, Disjoint};
 
 /// Structure-of-arrays positions (m) and inverse masses (1/kg), in the
 /// plan's lane order ([`GridPlan::lane`]).
@@ -29,6 +30,34 @@ pub(crate) struct Lanes {
     pub sy: Vec<f32>,
     pub sz: Vec<f32>,
     pub w: Vec<f32>,
+}
+
+impl Lanes {
+    /// Every array at `n` lanes.
+    pub fn resize(&mut self, n: usize) {
+        for buf in self.arrays_mut() {
+            buf.resize(n, 0.0);
+        }
+    }
+
+    /// The arrays for threads to share by disjoint ranges: x, y, z, the
+    /// substep-start x, y, z, and the inverse masses.
+    pub fn disjoint(&mut self) -> [Disjoint<'_, f32>; 7] {
+        self.arrays_mut().map(|v| Disjoint::new(&mut v[..]))
+    }
+
+    fn arrays_mut(&mut self) -> [&mut Vec<f32>; 7] {
+        let Lanes {
+            x,
+            y,
+            z,
+            sx,
+            sy,
+            sz,
+            w,
+        } = self;
+        [x, y, z, sx, sy, sz, w]
+    }
 }
 
 /// Columns of a row are stored in this many interleaved blocks (column `c`
@@ -56,8 +85,6 @@ struct Pass {
     dc: isize,
     /// Rest length (m) of the spring leaving each lane; 0 where none does.
     rest: Vec<f32>,
-    /// The spring's Lagrange multiplier over the substep's sweeps (N·s²).
-    lambda: Vec<f32>,
 }
 
 /// The grid's springs as passes, when every spring is one of the six grid
@@ -73,6 +100,9 @@ pub(crate) struct GridPlan {
     phases: [Vec<Region>; 2],
     /// Per phase and pass: its springs (a phase with few runs on one thread).
     work: [[usize; 6]; 2],
+    /// Per pass: the multiplier over the substep's sweeps (N·s²) of the
+    /// spring leaving each lane.
+    lambda: [Vec<f32>; 6],
 }
 
 /// Below this many springs, a phase of a pass runs on one thread: waking
@@ -217,7 +247,6 @@ impl GridPlan {
                 dr,
                 dc,
                 rest: vec![0.0; n],
-                lambda: vec![0.0; n],
             })
             .collect();
         let mut count = [0usize; 6];
@@ -267,6 +296,7 @@ impl GridPlan {
             passes,
             phases,
             work,
+            lambda: std::array::from_fn(|_| vec![0.0; n]),
         })
     }
 
@@ -276,10 +306,20 @@ impl GridPlan {
         self.lane[i] as usize
     }
 
+    /// Runs `f` on the particles of each band of rows (a range of particle
+    /// indices, which is also the band's range of lanes: lanes only reorder
+    /// a row), on rayon's threads with `threads`.
+    pub fn for_each_band(&self, threads: bool, f: impl Fn(std::ops::Range<usize>) + Sync + Send) {
+        sum_over(&self.phases[0], threads, |band| {
+            f(band.lanes.clone());
+            0
+        });
+    }
+
     /// Starts a substep: every spring's multiplier back to zero.
     pub fn reset(&mut self) {
-        for pass in &mut self.passes {
-            pass.lambda.fill(0.0);
+        for lambda in &mut self.lambda {
+            lambda.fill(0.0);
         }
     }
 }
@@ -291,26 +331,19 @@ pub(crate) struct Compliance {
     pub gamma: f32,
 }
 
-/// Raw access to the lanes and the passes' multipliers, shared by the
-/// regions of one phase, which touch disjoint lanes.
+/// The lanes and the passes' multipliers, shared by the regions of one
+/// phase, which touch disjoint lanes.
 #[derive(Clone, Copy)]
-struct SharedLanes {
-    x: *mut f32,
-    y: *mut f32,
-    z: *mut f32,
-    sx: *const f32,
-    sy: *const f32,
-    sz: *const f32,
-    w: *const f32,
-    lambda: [*mut f32; 6],
-    len: usize,
+struct SharedLanes<'a> {
+    x: Disjoint<'a, f32>,
+    y: Disjoint<'a, f32>,
+    z: Disjoint<'a, f32>,
+    sx: &'a [f32],
+    sy: &'a [f32],
+    sz: &'a [f32],
+    w: &'a [f32],
+    lambda: [Disjoint<'a, f32>; 6],
 }
-
-// SAFETY: a `SharedLanes` is only turned into slices by `view`, whose
-// callers hold views of disjoint ranges at any one time.
-unsafe impl Send for SharedLanes {}
-// SAFETY: as above.
-unsafe impl Sync for SharedLanes {}
 
 /// The lanes of one region: positions to update, substep-start positions and
 /// inverse masses to read, indexed from the region's first lane.
@@ -324,77 +357,51 @@ struct View<'a> {
     w: &'a [f32],
 }
 
-impl SharedLanes {
-    /// Raw access to `lanes` and the multipliers of `passes`, all of one length.
-    fn new(lanes: &mut Lanes, passes: &mut [Pass]) -> SharedLanes {
+impl<'a> SharedLanes<'a> {
+    /// `lanes` and the passes' multipliers `lambda`, all of one length.
+    fn new(lanes: &'a mut Lanes, lambda: &'a mut [Vec<f32>; 6]) -> SharedLanes<'a> {
         let len = lanes.x.len();
         let lengths = [
             &lanes.y, &lanes.z, &lanes.sx, &lanes.sy, &lanes.sz, &lanes.w,
         ];
         assert!(
-            lengths.iter().all(|v| v.len() == len)
-                && passes.len() == 6
-                && passes.iter().all(|p| p.lambda.len() == len),
+            lengths.iter().all(|v| v.len() == len) && lambda.iter().all(|l| l.len() == len),
             "lanes of one length"
         );
-        let mut lambda = [std::ptr::null_mut(); 6];
-        for (l, pass) in lambda.iter_mut().zip(passes.iter_mut()) {
-            *l = pass.lambda.as_mut_ptr();
-        }
+        let mut lambda = lambda.iter_mut().map(|l| Disjoint::new(&mut l[..]));
         SharedLanes {
-            x: lanes.x.as_mut_ptr(),
-            y: lanes.y.as_mut_ptr(),
-            z: lanes.z.as_mut_ptr(),
-            sx: lanes.sx.as_ptr(),
-            sy: lanes.sy.as_ptr(),
-            sz: lanes.sz.as_ptr(),
-            w: lanes.w.as_ptr(),
-            lambda,
-            len,
+            x: Disjoint::new(&mut lanes.x),
+            y: Disjoint::new(&mut lanes.y),
+            z: Disjoint::new(&mut lanes.z),
+            sx: &lanes.sx,
+            sy: &lanes.sy,
+            sz: &lanes.sz,
+            w: &lanes.w,
+            lambda: std::array::from_fn(|_| lambda.next().expect("six passes")),
         }
     }
 
     /// The lanes `range` and the multipliers there.
     ///
     /// # Safety
-    /// No other view of a range overlapping `range` may be alive meanwhile,
-    /// and the buffers `new` was given must outlive the view unmoved.
-    unsafe fn view<'a>(self, range: std::ops::Range<usize>) -> (View<'a>, [&'a mut [f32]; 6]) {
-        assert!(
-            range.start <= range.end && range.end <= self.len,
-            "a region in the grid"
-        );
-        let (at, len) = (range.start, range.len());
-        // SAFETY: in bounds (asserted), and exclusive by the caller's promise.
+    /// No other view of a range overlapping `range` may be in use meanwhile.
+    unsafe fn view(self, range: std::ops::Range<usize>) -> (View<'a>, [&'a mut [f32]; 6]) {
+        // SAFETY: exclusive by the caller's promise.
         unsafe {
-            let mutable = |p: *mut f32| std::slice::from_raw_parts_mut(p.add(at), len);
-            let shared = |p: *const f32| std::slice::from_raw_parts(p.add(at), len);
             (
                 View {
-                    x: mutable(self.x),
-                    y: mutable(self.y),
-                    z: mutable(self.z),
-                    sx: shared(self.sx),
-                    sy: shared(self.sy),
-                    sz: shared(self.sz),
-                    w: shared(self.w),
+                    x: self.x.range(range.clone()),
+                    y: self.y.range(range.clone()),
+                    z: self.z.range(range.clone()),
+                    sx: &self.sx[range.clone()],
+                    sy: &self.sy[range.clone()],
+                    sz: &self.sz[range.clone()],
+                    w: &self.w[range.clone()],
                 },
-                self.lambda.map(mutable),
+                self.lambda.map(|l| l.range(range.clone())),
             )
         }
     }
-}
-
-/// Runs `f` on every region of one phase and sums what it returns: on the
-/// threads of rayon's pool with `threads` (and the `parallel` feature).
-fn each_region(regions: &[Region], threads: bool, f: impl Fn(&Region) -> u32 + Sync + Send) -> u32 {
-    #[cfg(feature = "parallel")]
-    if threads && regions.len() > 1 {
-        use rayon::prelude::*;
-        return regions.par_iter().map(f).sum();
-    }
-    let _ = threads;
-    regions.iter().map(f).sum()
 }
 
 /// One Gauss–Seidel sweep over every spring: pass by pass in the plan's
@@ -425,12 +432,12 @@ fn sweep_with(
     threads: bool,
     simd: bool,
 ) {
-    let shared = SharedLanes::new(lanes, &mut plan.passes);
+    let shared = SharedLanes::new(lanes, &mut plan.lambda);
     let k: [Compliance; 6] = std::array::from_fn(|p| compliance[plan.passes[p].kind.index()]);
     let rest: [&[f32]; 6] = std::array::from_fn(|p| &plan.passes[p].rest[..]);
     for p in 0..6 {
         for (phase, work) in plan.phases.iter().zip(&plan.work) {
-            each_region(
+            sum_over(
                 phase,
                 threads && work[p] >= PARALLEL_MIN_SPRINGS,
                 |region| {
@@ -495,7 +502,7 @@ pub(crate) fn limit_stretch(
     if !factor.is_finite() {
         return 0;
     }
-    let shared = SharedLanes::new(lanes, &mut plan.passes);
+    let shared = SharedLanes::new(lanes, &mut plan.lambda);
     let stretch: [bool; 6] = std::array::from_fn(|p| plan.passes[p].kind == SpringKind::Stretch);
     let rest: [&[f32]; 6] = std::array::from_fn(|p| &plan.passes[p].rest[..]);
     let mut shortened = 0;
@@ -504,7 +511,7 @@ pub(crate) fn limit_stretch(
         for p in (0..6).filter(|&p| stretch[p]) {
             for (phase, work) in plan.phases.iter().zip(&plan.work) {
                 let threads = threads && work[p] >= PARALLEL_MIN_SPRINGS;
-                over += each_region(phase, threads, |region| {
+                over += sum_over(phase, threads, |region| {
                     // SAFETY: as in `sweep_with`: disjoint regions, borrowed buffers.
                     let (mut view, _) = unsafe { shared.view(region.lanes.clone()) };
                     let rest = &rest[p][region.lanes.clone()];

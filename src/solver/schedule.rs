@@ -16,7 +16,7 @@ use super::stability::stable_substeps;
 use super::strain_limit::limit_stretch;
 use super::substep::Substep;
 use crate::cloth::{Cloth, Particles, SpringKind};
-use crate::collision::Obstacle;
+use crate::collision::{Obstacle, ResolveOptions};
 use crate::context::StepContext;
 use crate::error::{positive, ClothError};
 use crate::forces::{ForceModel, Masses};
@@ -145,8 +145,11 @@ impl ClothSolver {
                 &mut cloth.particles,
                 &cloth.topology.springs,
                 obstacles,
-                outcome.friction,
-                edges,
+                ResolveOptions {
+                    friction: outcome.friction,
+                    edges,
+                    threads: self.settings.parallel,
+                },
             );
         }
         // Divergence check.

@@ -20,8 +20,9 @@
 //! of the force-based integrators.
 
 use crate::cloth::{Grid, SpringKind, Springs};
-use crate::forces::add_wind_forces;
+use crate::forces::{add_wind_forces, ForceModel};
 use crate::math::Vector;
+use crate::parallel::Disjoint;
 
 use super::grid_sweep::{limit_stretch, sweep, Compliance, GridPlan, Lanes};
 use super::strain_limit;
@@ -75,26 +76,13 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
     let model = &sub.model;
     let h = sub.ctx.h;
     let n = x.len();
-    ws.start.clear();
-    ws.start.extend_from_slice(x);
     let calm = model.wind.is_calm();
     if !calm {
         ws.wind.clear();
         ws.wind.resize(n, Vector::ZERO);
         add_wind_forces(model.triangles, &model.wind, x, &mut ws.wind);
     }
-    // Predict: external forces, explicitly; pinned particles move with their velocity.
-    for i in 0..n {
-        let w = model.inv_mass[i];
-        if w != 0.0 {
-            let mut a = model.gravity - v[i] * model.air_drag;
-            if !calm {
-                a += ws.wind[i] * w;
-            }
-            v[i] += a * h;
-        }
-        x[i] += v[i] * h;
-    }
+    let wind = if calm { None } else { Some(&ws.wind[..]) };
     let h2 = h * h;
     let compliance = model.spring_params.map(|p| Compliance {
         alpha: 1.0 / (p.stiffness * h2),
@@ -110,34 +98,58 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
     match (&mut ws.plan, sub.grid) {
         (Some(plan), Some(_)) => {
             plan.reset();
-            // Structure of arrays for the row kernel: positions now, at the
-            // substep's start, and inverse masses.
-            let l = &mut ws.lanes;
-            for buf in [
-                &mut l.x, &mut l.y, &mut l.z, &mut l.sx, &mut l.sy, &mut l.sz, &mut l.w,
-            ] {
-                buf.resize(n, 0.0);
-            }
-            for i in 0..n {
-                let (lane, p, s) = (plan.lane(i), x[i], ws.start[i]);
-                (l.x[lane], l.y[lane], l.z[lane]) = (p.x, p.y, p.z);
-                (l.sx[lane], l.sy[lane], l.sz[lane]) = (s.x, s.y, s.z);
-                l.w[lane] = model.inv_mass[i];
-            }
             let threads = sub.settings.parallel;
+            let l = &mut ws.lanes;
+            l.resize(n);
+            // Predict, and copy into the lanes: positions now, at the
+            // substep's start, and inverse masses; band by band.
+            let (xs, vs, lanes) = (Disjoint::new(x), Disjoint::new(v), l.disjoint());
+            plan.for_each_band(threads, |band| {
+                // SAFETY: bands are disjoint ranges of particles and of lanes.
+                let ([x, v], [lx, ly, lz, sx, sy, sz, lw]) = unsafe {
+                    (
+                        [xs, vs].map(|s| s.range(band.clone())),
+                        lanes.map(|s| s.range(band.clone())),
+                    )
+                };
+                for (k, i) in band.clone().enumerate() {
+                    let start = x[k];
+                    predict(model, wind, i, (&mut x[k], &mut v[k]), h);
+                    let (lane, p) = (plan_lane(plan, i, &band), x[k]);
+                    (lx[lane], ly[lane], lz[lane]) = (p.x, p.y, p.z);
+                    (sx[lane], sy[lane], sz[lane]) = (start.x, start.y, start.z);
+                    lw[lane] = model.inv_mass[i];
+                }
+            });
             for _ in 0..sub.settings.xpbd_iterations {
                 sweep(plan, l, &compliance, threads);
             }
             limit_stretch(plan, l, model.stretch_limit, threads);
             // Velocities from the motion: `x` still holds the prediction.
-            for i in 0..n {
-                let lane = plan.lane(i);
-                let swept = Vector::new(l.x[lane], l.y[lane], l.z[lane]);
-                correct_velocity(&mut v[i], swept - x[i], model.inv_mass[i], h);
-                x[i] = swept;
-            }
+            let (xs, vs, lanes) = (Disjoint::new(x), Disjoint::new(v), l.disjoint());
+            plan.for_each_band(threads, |band| {
+                // SAFETY: as above.
+                let ([x, v], [lx, ly, lz, ..]) = unsafe {
+                    (
+                        [xs, vs].map(|s| s.range(band.clone())),
+                        lanes.map(|s| s.range(band.clone())),
+                    )
+                };
+                for (k, i) in band.clone().enumerate() {
+                    let lane = plan_lane(plan, i, &band);
+                    let swept = Vector::new(lx[lane], ly[lane], lz[lane]);
+                    correct_velocity(&mut v[k], swept - x[k], model.inv_mass[i], h);
+                    x[k] = swept;
+                }
+            });
         }
         _ => {
+            ws.start.clear();
+            ws.start.extend_from_slice(x);
+            for i in 0..n {
+                let (xi, vi) = (&mut x[i], &mut v[i]);
+                predict(model, wind, i, (xi, vi), h);
+            }
             ws.predicted.clear();
             ws.predicted.extend_from_slice(x);
             ws.lambda.clear();
@@ -153,6 +165,34 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
             }
         }
     }
+}
+
+/// Particle `i`'s prediction over `h` seconds: external forces (gravity,
+/// air drag, `wind` in N if any), explicitly; a pinned particle moves with
+/// its velocity.
+#[inline(always)]
+fn predict(
+    model: &ForceModel,
+    wind: Option<&[Vector]>,
+    i: usize,
+    (x, v): (&mut Vector, &mut Vector),
+    h: f32,
+) {
+    let w = model.inv_mass[i];
+    if w != 0.0 {
+        let mut a = model.gravity - *v * model.air_drag;
+        if let Some(wind) = wind {
+            a += wind[i] * w;
+        }
+        *v += a * h;
+    }
+    *x += *v * h;
+}
+
+/// The lane of particle `i` counted from the start of its `band`.
+#[inline(always)]
+fn plan_lane(plan: &GridPlan, i: usize, band: &std::ops::Range<usize>) -> usize {
+    plan.lane(i) - band.start
 }
 
 /// The velocity at the end of a substep of `h` seconds: the predicted one

@@ -1,0 +1,205 @@
+//! The particle pass of contact resolution: every particle near an obstacle
+//! is pushed out to the thickness and, by the solver's policy, slowed by
+//! Coulomb friction. Particles are taken in blocks of [`BLOCK`], which may
+//! run on any thread: a block writes only its own particles, and the momentum
+//! it hands to the obstacles is kept in its scratch, to be summed in
+//! particle order afterwards, so the bits never depend on the thread count.
+
+use parry3d::query::Ray;
+
+use super::contact::Contact;
+use super::contact_set::{ContactRange, ParticleContact, NONE};
+use super::obstacle::Obstacle;
+use super::response::FrictionPolicy;
+use super::tracks::ObstacleTracks;
+use crate::context::StepContext;
+use crate::math::Vector;
+
+/// Distance (m) beyond the thickness within which a particle still counts as touching.
+pub(super) const CONTACT_SLACK: f32 = 1.0e-5;
+
+/// Particles in a block of the pass: large enough that a block outweighs
+/// handing it to a thread, small enough that a cloth of a few thousand
+/// particles still has blocks for two threads.
+pub(super) const BLOCK: usize = 1024;
+
+/// Momentum `j` (N·s) a particle handed to an obstacle at `point` (m).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct HandedImpulse {
+    pub obstacle: u32,
+    pub point: Vector,
+    pub j: Vector,
+}
+
+/// Scratch of one block: the candidates of its current particle, and the
+/// momentum its particles handed to obstacles, in particle order.
+#[derive(Debug, Default)]
+pub(super) struct BlockScratch {
+    candidates: Vec<u32>,
+    pub impulses: Vec<HandedImpulse>,
+}
+
+/// What a block of the pass writes, indexed from the block's first particle:
+/// positions (m) and velocities (m/s); the nearest obstacle (`NONE` for
+/// none), its outward normal, and the distance to it after resolution (m);
+/// the contacts.
+pub(super) struct BlockOut<'a> {
+    pub x: &'a mut [Vector],
+    pub v: &'a mut [Vector],
+    pub nearest: &'a mut [u32],
+    pub normal: &'a mut [Vector],
+    pub distance: &'a mut [f32],
+    pub contacts: ContactRange<'a>,
+}
+
+/// What every block of the pass reads.
+pub(super) struct ParticlePass<'a> {
+    pub ctx: &'a StepContext,
+    pub tracks: &'a ObstacleTracks,
+    pub obstacles: &'a [Obstacle],
+    /// Positions at the start of the substep (m), for tracing.
+    pub x_prev: &'a [Vector],
+    pub mass: &'a [f32],
+    pub inv_mass: &'a [f32],
+    pub friction: FrictionPolicy,
+    /// Beyond this distance (m) an obstacle is neither touched nor near.
+    pub far: f32,
+}
+
+impl ParticlePass<'_> {
+    /// Resolves the particles `range` (the block's); returns the contacts resolved.
+    pub fn block(
+        &self,
+        range: std::ops::Range<usize>,
+        out: &mut BlockOut,
+        scratch: &mut BlockScratch,
+    ) -> u32 {
+        let thickness = self.ctx.thickness;
+        let mut contacts = 0;
+        for (k, i) in range.enumerate() {
+            out.nearest[k] = NONE;
+            out.contacts.clear(k);
+            self.tracks
+                .gather_particle(i, out.x[k], &mut scratch.candidates);
+            let mut nearest_distance = f32::INFINITY;
+            for c in 0..scratch.candidates.len() {
+                let o = scratch.candidates[c] as usize;
+                // Beyond the reach of the contact and the edge pass: as if
+                // it were not a candidate (the edge pass then takes the
+                // particle's distance to be the reach, less than it is).
+                if self.tracks.surely_beyond(o, out.x[k], self.far) {
+                    continue;
+                }
+                let Some(hit) = self.contact(o, self.x_prev[i], out.x[k]) else {
+                    continue;
+                };
+                if hit.signed_distance < nearest_distance {
+                    nearest_distance = hit.signed_distance;
+                    out.nearest[k] = o as u32;
+                    out.normal[k] = hit.normal;
+                    // Resolution below leaves a particle at least the thickness out.
+                    out.distance[k] = if self.inv_mass[i] != 0.0 {
+                        hit.signed_distance.max(thickness)
+                    } else {
+                        hit.signed_distance
+                    };
+                }
+                // A hair of slack keeps particles a solver left exactly at the
+                // thickness in contact, so friction still acts on them.
+                if self.inv_mass[i] != 0.0 && hit.signed_distance < thickness + CONTACT_SLACK {
+                    let (contact, handed) =
+                        self.resolve(i, (&mut out.x[k], &mut out.v[k]), (o, hit));
+                    out.contacts.touch(k, &contact);
+                    scratch.impulses.push(handed);
+                    contacts += 1;
+                }
+            }
+        }
+        contacts
+    }
+
+    /// The contact with obstacle `o` of a particle now at `x` that started
+    /// the substep at `x_prev`. A particle that ended the substep inside but
+    /// started it outside (relative to the moving obstacle) is traced along
+    /// its relative path, so it is pushed back out through the face it
+    /// entered rather than through the nearest one: fast obstacles do not
+    /// pass through the cloth.
+    fn contact(&self, o: usize, x_prev: Vector, x: Vector) -> Option<Contact> {
+        let tracks = self.tracks;
+        let (obstacle, pose) = (&self.obstacles[o], &tracks.poses[o]);
+        let c = tracks.contact(self.obstacles, o, x)?;
+        if c.signed_distance >= 0.0 {
+            return Some(c);
+        }
+        let prev = &tracks.prev_poses[o];
+        let from = prev.inverse_transform_point(x_prev);
+        if obstacle.shape.contains_local_point(from) {
+            return Some(c);
+        }
+        let to = pose.inverse_transform_point(x);
+        let ray = Ray::new(from, to - from);
+        match obstacle
+            .shape
+            .cast_local_ray_and_get_normal(&ray, 1.0, true)
+        {
+            Some(hit) if hit.normal.is_finite() && hit.normal.length_squared() > 0.5 => {
+                let entry = ray.point_at(hit.time_of_impact);
+                let n = hit.normal.normalize();
+                // Depth below the entry face, along its normal.
+                let depth = (to - entry).dot(n).min(0.0);
+                Some(Contact {
+                    point: pose.transform_point(to - n * depth),
+                    normal: pose.transform_vector(n),
+                    signed_distance: depth,
+                })
+            }
+            _ => Some(c),
+        }
+    }
+
+    /// Pushes particle `i` (at `x`, moving at `v`) out of obstacle `o` (the
+    /// `hit` with it) and, by the solver's policy, applies friction. Returns
+    /// the contact and the momentum handed to the obstacle.
+    fn resolve(
+        &self,
+        i: usize,
+        (x, v): (&mut Vector, &mut Vector),
+        (o, hit): (usize, Contact),
+    ) -> (ParticleContact, HandedImpulse) {
+        let (ctx, obstacle) = (self.ctx, &self.obstacles[o]);
+        let n = hit.normal;
+        let new_x = *x + n * (ctx.thickness - hit.signed_distance).max(0.0);
+        let surface_v = self.tracks.surface_velocity_of(self.obstacles, o, new_x);
+        let v_old = *v;
+        let rel = v_old - surface_v;
+        let vn = rel.dot(n);
+        // The normal velocity taken away bounds what friction may take away.
+        let removed = (-vn).max(0.0);
+        let rel_t = rel - n * vn;
+        let slip = rel_t.length();
+        let limit = obstacle.friction * removed;
+        let rel_t_new = match self.friction {
+            FrictionPolicy::AlreadySolved => rel_t,
+            FrictionPolicy::Apply if slip <= limit => Vector::ZERO,
+            FrictionPolicy::Apply => rel_t * (1.0 - limit / slip),
+        };
+        let v_new = surface_v + n * vn.max(0.0) + rel_t_new;
+        // Undo the slip friction forbade during this substep.
+        *x = new_x + (rel_t_new - rel_t) * ctx.h;
+        *v = v_new;
+        let contact = ParticleContact {
+            obstacle: o as u32,
+            normal: n,
+            surface_velocity: surface_v,
+            immovable: obstacle.body.is_none(),
+            gap: 0.0,
+            friction: obstacle.friction,
+        };
+        let handed = HandedImpulse {
+            obstacle: o as u32,
+            point: new_x,
+            j: (v_old - v_new) * self.mass[i],
+        };
+        (contact, handed)
+    }
+}
