@@ -15,6 +15,10 @@ use crate::context::StepContext;
 use crate::math::Vector;
 use crate::parallel::{sum_over_count, Disjoint};
 
+/// Springs per block of the edge pass's first look (which springs come
+/// near an obstacle), a block to a thread.
+const EDGE_BLOCK: usize = 4096;
+
 /// How [`CollisionStage::resolve`] goes about a substep's contacts.
 #[derive(Debug, Clone, Copy)]
 pub struct ResolveOptions {
@@ -45,6 +49,8 @@ pub struct CollisionStage {
     pub(super) edge_moved: Vec<bool>,
     /// Per block of the particle pass: its scratch.
     blocks: Vec<BlockScratch>,
+    /// Per block of [`EDGE_BLOCK`] springs: those the edge pass must look at.
+    edge_blocks: Vec<Vec<u32>>,
 }
 
 impl CollisionStage {
@@ -252,7 +258,8 @@ impl CollisionStage {
             }
         }
         if options.edges {
-            self.resolve_edges(particles, springs, obstacles, thickness);
+            let threads = options.threads;
+            self.resolve_edges(particles, springs, obstacles, (thickness, threads));
         }
         contacts
     }
@@ -264,19 +271,43 @@ impl CollisionStage {
         particles: &mut Particles,
         springs: &Springs,
         obstacles: &[Obstacle],
-        thickness: f32,
+        (thickness, threads): (f32, bool),
     ) {
         for kind in [SpringKind::Stretch, SpringKind::Shear] {
-            for s in springs.range(kind) {
+            // Which springs may cut an obstacle, by what the particle pass
+            // found (which this pass does not change): on threads, block by
+            // block, then taken in spring order on one.
+            let range = springs.range(kind);
+            let blocks = range.len().div_ceil(EDGE_BLOCK);
+            if self.edge_blocks.len() < blocks {
+                self.edge_blocks.resize_with(blocks, Vec::new);
+            }
+            let (nearest, normal) = (&self.nearest, &self.normal);
+            let lists = Disjoint::new(&mut self.edge_blocks[..]);
+            sum_over_count(blocks, threads, |k| {
+                // SAFETY: block `k` alone uses list `k`.
+                let list = unsafe { &mut lists.range(k..k + 1)[0] };
+                list.clear();
+                let first = range.start + k * EDGE_BLOCK;
+                for s in first..(first + EDGE_BLOCK).min(range.end) {
+                    let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
+                    let (oa, ob) = (nearest[a], nearest[b]);
+                    // No end near an obstacle, or both ends on one smooth
+                    // stretch of the same surface: nothing to cut.
+                    if (oa == NONE && ob == NONE)
+                        || (oa == ob && normal[a].dot(normal[b]) > SMOOTH_COS)
+                    {
+                        continue;
+                    }
+                    list.push(s as u32);
+                }
+                0
+            });
+            let lists = std::mem::take(&mut self.edge_blocks);
+            for &s in lists[..blocks].iter().flatten() {
+                let s = s as usize;
                 let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
                 let (oa, ob) = (self.nearest[a], self.nearest[b]);
-                if oa == NONE && ob == NONE {
-                    continue;
-                }
-                // Both ends on one smooth stretch of the same surface: nothing to cut.
-                if oa == ob && self.normal[a].dot(self.normal[b]) > SMOOTH_COS {
-                    continue;
-                }
                 // Distance to a surface changes no faster than along the
                 // spring, so no point of it comes closer than
                 // (d_a + d_b - length) / 2.
@@ -296,6 +327,7 @@ impl CollisionStage {
                 }
                 self.resolve_spring(particles, a, b, obstacles, 0.5 * thickness);
             }
+            self.edge_blocks = lists;
         }
         // Particles come first: whatever the springs did, every particle
         // the edge pass moved ends the substep outside the obstacles.
