@@ -37,6 +37,9 @@ pub(super) struct HandedImpulse {
 pub(super) struct BlockScratch {
     candidates: Vec<u32>,
     pub impulses: Vec<HandedImpulse>,
+    /// Particles that came near an obstacle from outside their cached
+    /// margin ([`super::tracks::ObstacleTracks::has_cached`] missed them).
+    pub strays: u32,
 }
 
 /// What a block of the pass writes, indexed from the block's first particle:
@@ -76,10 +79,12 @@ impl ParticlePass<'_> {
     ) -> u32 {
         let thickness = self.ctx.thickness;
         let mut contacts = 0;
+        scratch.strays = 0;
         for (k, i) in range.enumerate() {
             out.nearest[k] = NONE;
             out.contacts.clear(k);
-            self.tracks
+            let cached = self
+                .tracks
                 .gather_particle(i, out.x[k], &mut scratch.candidates);
             let mut nearest_distance = f32::INFINITY;
             for c in 0..scratch.candidates.len() {
@@ -113,6 +118,9 @@ impl ParticlePass<'_> {
                     scratch.impulses.push(handed);
                     contacts += 1;
                 }
+            }
+            if !cached && out.nearest[k] != NONE {
+                scratch.strays += 1;
             }
         }
         contacts

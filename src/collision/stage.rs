@@ -51,6 +51,16 @@ pub struct CollisionStage {
     blocks: Vec<BlockScratch>,
     /// Per block of [`EDGE_BLOCK`] springs: those the edge pass must look at.
     edge_blocks: Vec<Vec<u32>>,
+    /// The stretch and shear springs that may come near an obstacle this
+    /// step, in spring order ([`CollisionStage::cache_candidates`]).
+    edge_watch: Vec<u32>,
+}
+
+/// The springs the edge pass keeps out of obstacles: stretch, then shear.
+fn edge_springs(springs: &Springs) -> impl Iterator<Item = usize> {
+    springs
+        .range(SpringKind::Stretch)
+        .chain(springs.range(SpringKind::Shear))
 }
 
 impl CollisionStage {
@@ -69,8 +79,18 @@ impl CollisionStage {
     /// Finds once for the step which obstacles each particle at `x` may meet
     /// while it stays within `margin` metres of there (further, it is looked
     /// up afresh: the cache changes no result, only the cost).
-    pub fn cache_candidates(&mut self, x: &[Vector], margin: f32) {
+    /// Also lists, in spring order, the stretch and shear `springs` with an
+    /// end that has candidates: while no particle strays beyond its margin,
+    /// the edge pass need look at no other.
+    pub fn cache_candidates(&mut self, x: &[Vector], margin: f32, springs: &Springs) {
         self.tracks.cache_candidates(x, margin);
+        self.edge_watch.clear();
+        for s in edge_springs(springs) {
+            let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
+            if self.tracks.has_cached(a) || self.tracks.has_cached(b) {
+                self.edge_watch.push(s as u32);
+            }
+        }
     }
 
     /// Moves the obstacles to where they are at the end of the context's substep.
@@ -249,7 +269,9 @@ impl CollisionStage {
             pass.block(range, &mut out, scratch)
         });
         // The momentum handed to the obstacles, in particle order.
-        for block in &mut self.blocks {
+        let mut strays = 0;
+        for block in &mut self.blocks[..blocks] {
+            strays += block.strays;
             for handed in block.impulses.drain(..) {
                 let imp = &mut self.tracks.impulses[handed.obstacle as usize];
                 imp.linear += handed.j;
@@ -258,8 +280,10 @@ impl CollisionStage {
             }
         }
         if options.edges {
+            // A stray particle may meet an obstacle along any spring.
+            let watched = strays == 0 && !self.tracks.cache_is_empty();
             let threads = options.threads;
-            self.resolve_edges(particles, springs, obstacles, (thickness, threads));
+            self.resolve_edges(particles, springs, obstacles, (thickness, threads, watched));
         }
         contacts
     }
@@ -271,64 +295,77 @@ impl CollisionStage {
         particles: &mut Particles,
         springs: &Springs,
         obstacles: &[Obstacle],
-        (thickness, threads): (f32, bool),
+        (thickness, threads, watched): (f32, bool, bool),
     ) {
-        for kind in [SpringKind::Stretch, SpringKind::Shear] {
-            // Which springs may cut an obstacle, by what the particle pass
-            // found (which this pass does not change): on threads, block by
-            // block, then taken in spring order on one.
-            let range = springs.range(kind);
-            let blocks = range.len().div_ceil(EDGE_BLOCK);
-            if self.edge_blocks.len() < blocks {
-                self.edge_blocks.resize_with(blocks, Vec::new);
+        // Which springs may cut an obstacle, by what the particle pass found
+        // (which this pass does not change): the watched springs or all, on
+        // threads, block by block; then those, in spring order, on one.
+        let (stretch, shear) = (
+            springs.range(SpringKind::Stretch),
+            springs.range(SpringKind::Shear),
+        );
+        let count = if watched {
+            self.edge_watch.len()
+        } else {
+            stretch.len() + shear.len()
+        };
+        let spring = |k: usize| -> usize {
+            if watched {
+                self.edge_watch[k] as usize
+            } else if k < stretch.len() {
+                stretch.start + k
+            } else {
+                shear.start + (k - stretch.len())
             }
-            let (nearest, normal) = (&self.nearest, &self.normal);
-            let lists = Disjoint::new(&mut self.edge_blocks[..]);
-            sum_over_count(blocks, threads, |k| {
-                // SAFETY: block `k` alone uses list `k`.
-                let list = unsafe { &mut lists.range(k..k + 1)[0] };
-                list.clear();
-                let first = range.start + k * EDGE_BLOCK;
-                for s in first..(first + EDGE_BLOCK).min(range.end) {
-                    let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
-                    let (oa, ob) = (nearest[a], nearest[b]);
-                    // No end near an obstacle, or both ends on one smooth
-                    // stretch of the same surface: nothing to cut.
-                    if (oa == NONE && ob == NONE)
-                        || (oa == ob && normal[a].dot(normal[b]) > SMOOTH_COS)
-                    {
-                        continue;
-                    }
-                    list.push(s as u32);
-                }
-                0
-            });
-            let lists = std::mem::take(&mut self.edge_blocks);
-            for &s in lists[..blocks].iter().flatten() {
-                let s = s as usize;
+        };
+        let blocks = count.div_ceil(EDGE_BLOCK);
+        if self.edge_blocks.len() < blocks {
+            self.edge_blocks.resize_with(blocks, Vec::new);
+        }
+        let (nearest, normal) = (&self.nearest, &self.normal);
+        let lists = Disjoint::new(&mut self.edge_blocks[..]);
+        sum_over_count(blocks, threads, |k| {
+            // SAFETY: block `k` alone uses list `k`.
+            let list = unsafe { &mut lists.range(k..k + 1)[0] };
+            list.clear();
+            for s in (k * EDGE_BLOCK..((k + 1) * EDGE_BLOCK).min(count)).map(spring) {
                 let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
-                let (oa, ob) = (self.nearest[a], self.nearest[b]);
-                // Distance to a surface changes no faster than along the
-                // spring, so no point of it comes closer than
-                // (d_a + d_b - length) / 2.
-                let da = if oa == NONE {
-                    self.tracks.reach
-                } else {
-                    self.distance[a]
-                };
-                let db = if ob == NONE {
-                    self.tracks.reach
-                } else {
-                    self.distance[b]
-                };
-                let length = (particles.x[b] - particles.x[a]).length();
-                if 0.5 * (da + db - length) >= 0.5 * thickness {
+                let (oa, ob) = (nearest[a], nearest[b]);
+                // No end near an obstacle, or both ends on one smooth
+                // stretch of the same surface: nothing to cut.
+                if (oa == NONE && ob == NONE) || (oa == ob && normal[a].dot(normal[b]) > SMOOTH_COS)
+                {
                     continue;
                 }
-                self.resolve_spring(particles, a, b, obstacles, 0.5 * thickness);
+                list.push(s as u32);
             }
-            self.edge_blocks = lists;
+            0
+        });
+        let lists = std::mem::take(&mut self.edge_blocks);
+        for &s in lists[..blocks].iter().flatten() {
+            let s = s as usize;
+            let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
+            let (oa, ob) = (self.nearest[a], self.nearest[b]);
+            // Distance to a surface changes no faster than along the
+            // spring, so no point of it comes closer than
+            // (d_a + d_b - length) / 2.
+            let da = if oa == NONE {
+                self.tracks.reach
+            } else {
+                self.distance[a]
+            };
+            let db = if ob == NONE {
+                self.tracks.reach
+            } else {
+                self.distance[b]
+            };
+            let length = (particles.x[b] - particles.x[a]).length();
+            if 0.5 * (da + db - length) >= 0.5 * thickness {
+                continue;
+            }
+            self.resolve_spring(particles, a, b, obstacles, 0.5 * thickness);
         }
+        self.edge_blocks = lists;
         // Particles come first: whatever the springs did, every particle
         // the edge pass moved ends the substep outside the obstacles.
         for i in 0..particles.len() {

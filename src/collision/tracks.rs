@@ -121,14 +121,17 @@ impl ObstacleTracks {
 
     /// The candidates of particle `i` at `point`, into `out`: the same
     /// obstacles in the same order as [`ObstacleTracks::gather`], from the
-    /// step's cache while the particle is within its margin.
+    /// step's cache while the particle is within its margin. Returns false
+    /// when they came from the broad phase instead.
     #[inline]
-    pub(super) fn gather_particle(&self, i: usize, point: Vector, out: &mut Vec<u32>) {
+    pub(super) fn gather_particle(&self, i: usize, point: Vector, out: &mut Vec<u32>) -> bool {
         let Some(&anchor) = self.anchors.get(i) else {
-            return self.gather_box_into(Aabb::new(point, point), out);
+            self.gather_box_into(Aabb::new(point, point), out);
+            return false;
         };
         if (point - anchor).abs().max_element() > self.cache_margin {
-            return self.gather_box_into(Aabb::new(point, point), out);
+            self.gather_box_into(Aabb::new(point, point), out);
+            return false;
         }
         out.clear();
         let (from, to) = (
@@ -136,7 +139,7 @@ impl ObstacleTracks {
             self.cache_start[i + 1] as usize,
         );
         if from == to {
-            return;
+            return true;
         }
         let here = Aabb::new(point, point);
         for &o in &self.cached[from..to] {
@@ -144,6 +147,18 @@ impl ObstacleTracks {
                 out.push(o);
             }
         }
+        true
+    }
+
+    /// True when no cache was made this step.
+    pub(super) fn cache_is_empty(&self) -> bool {
+        self.anchors.is_empty()
+    }
+
+    /// True when particle `i` has candidates in the step's cache: while it
+    /// stays within the margin, it can come near no obstacle otherwise.
+    pub(super) fn has_cached(&self, i: usize) -> bool {
+        self.cache_start.get(i..i + 2).is_some_and(|c| c[0] != c[1])
     }
 
     /// The contact of `point` with obstacle `o` where it is now.

@@ -66,8 +66,11 @@ impl ClothSolver {
         let edges = self.settings.edge_collisions;
         let reach = cloth.params.thickness + if edges { max_rest_length(cloth) } else { 0.0 };
         ws.collision.begin_step(obstacles, dt, reach, n);
-        ws.collision
-            .cache_candidates(&cloth.particles.x, candidate_margin(cloth, dt));
+        ws.collision.cache_candidates(
+            &cloth.particles.x,
+            candidate_margin(cloth, dt),
+            &cloth.topology.springs,
+        );
 
         let mut report = StepReport {
             substeps: k,
