@@ -44,3 +44,48 @@ fn parallel_and_serial_steps_are_bit_identical() {
         assert_eq!(parallel, run(false), "{integrator}");
     }
 }
+
+#[test]
+fn the_default_solver_gives_the_same_bits_on_two_threads_as_on_one() {
+    // xpbd's sweep in bands, its particle loops and the collision stage's
+    // blocks on a team; the drape lying on its ball (contacts, friction,
+    // the edge pass) and the hammock with its dynamic boxes (momentum
+    // handed to rapier, summed in particle order).
+    for (kind, n, frames) in [(SceneKind::Drape, 64, 40), (SceneKind::Hammock, 64, 60)] {
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let options = SceneOptions {
+                    n: Some(n),
+                    substeps: Some(Substeps::Fixed(24)),
+                    ..Default::default()
+                };
+                let mut scene = Scene::build(kind, &options).unwrap();
+                assert_eq!(scene.solver.settings.integrator, Integrator::Xpbd);
+                let mut contacts = 0;
+                for _ in 0..frames {
+                    contacts += scene.step_frame().unwrap().contacts;
+                }
+                let bodies: Vec<u32> = scene
+                    .rapier
+                    .iter()
+                    .flat_map(|side| side.all_bodies.iter().map(|h| &side.world.bodies[*h]))
+                    .flat_map(|b| {
+                        let (t, v) = (b.translation().to_array(), b.linvel().to_array());
+                        t.into_iter().chain(v).map(f32::to_bits)
+                    })
+                    .collect();
+                (bits(&scene.cloth), bodies, contacts)
+            })
+        };
+        let one = run(1);
+        assert!(one.2 > 0, "{kind:?}: no contact in the run");
+        if kind == SceneKind::Hammock {
+            assert!(!one.1.is_empty(), "the hammock has bodies");
+        }
+        assert!(one == run(2), "{kind:?}: two threads differ from one");
+    }
+}

@@ -21,4 +21,5 @@ pub use contact::{contact, penetration_depth, Contact};
 pub use contact_set::{ContactSet, ParticleContact};
 pub use obstacle::{DynamicBody, Obstacle, ObstacleImpulse};
 pub use response::{respond, FrictionPolicy, Response};
-pub use stage::{CollisionStage, ResolveOptions};
+pub use stage::CollisionStage;
+pub(crate) use stage::ResolveOptions;

@@ -13,21 +13,21 @@ use super::tracks::ObstacleTracks;
 use crate::cloth::{Particles, SpringKind, Springs};
 use crate::context::StepContext;
 use crate::math::Vector;
-use crate::parallel::{sum_over_count, Disjoint};
+use crate::parallel::{Disjoint, Team};
 
 /// Springs per block of the edge pass's first look (which springs come
 /// near an obstacle), a block to a thread.
 const EDGE_BLOCK: usize = 4096;
 
 /// How [`CollisionStage::resolve`] goes about a substep's contacts.
-#[derive(Debug, Clone, Copy)]
-pub struct ResolveOptions {
+#[derive(Clone, Copy)]
+pub(crate) struct ResolveOptions<'a> {
     /// Whether Coulomb friction acts here or was decided in the solve.
     pub friction: FrictionPolicy,
     /// Keep stretch and shear springs out of the obstacles too.
     pub edges: bool,
-    /// Resolve blocks of particles on rayon's threads (`parallel` feature).
-    pub threads: bool,
+    /// The threads that resolve blocks of particles.
+    pub team: Team<'a>,
 }
 
 /// Two contact normals closer than this (cosine) lie on one smooth stretch of
@@ -208,10 +208,10 @@ impl CollisionStage {
     /// springs too (`options.edges`). The solver's friction policy says whether Coulomb
     /// friction acts on the touching particles here or was already decided
     /// inside its solve (then they are only put back on the surface).
-    /// The particles are resolved block by block, on rayon's threads with
-    /// `threads`, and the blocks' impulses summed in particle order: the
-    /// bits are those of one thread. Returns the particle contacts resolved.
-    pub fn resolve(
+    /// The particles are resolved block by block, on the team's threads,
+    /// and the blocks' impulses summed in particle order: the bits are
+    /// those of one thread. Returns the particle contacts resolved.
+    pub(crate) fn resolve(
         &mut self,
         ctx: &StepContext,
         particles: &mut Particles,
@@ -249,7 +249,7 @@ impl CollisionStage {
         let distance = Disjoint::new(&mut self.distance[..]);
         let contact_set = self.contacts.shared();
         let scratch = Disjoint::new(&mut self.blocks[..]);
-        let contacts = sum_over_count(blocks, options.threads, |b| {
+        let contacts = options.team.sum_count(blocks, |b| {
             let range = b * BLOCK..((b + 1) * BLOCK).min(n);
             // SAFETY: blocks are disjoint ranges of particles, and block `b`
             // alone uses scratch `b`.
@@ -282,8 +282,8 @@ impl CollisionStage {
         if options.edges {
             // A stray particle may meet an obstacle along any spring.
             let watched = strays == 0 && !self.tracks.cache_is_empty();
-            let threads = options.threads;
-            self.resolve_edges(particles, springs, obstacles, (thickness, threads, watched));
+            let team = options.team;
+            self.resolve_edges(particles, springs, obstacles, (thickness, team, watched));
         }
         contacts
     }
@@ -295,7 +295,7 @@ impl CollisionStage {
         particles: &mut Particles,
         springs: &Springs,
         obstacles: &[Obstacle],
-        (thickness, threads, watched): (f32, bool, bool),
+        (thickness, team, watched): (f32, Team, bool),
     ) {
         // Which springs may cut an obstacle, by what the particle pass found
         // (which this pass does not change): the watched springs or all, on
@@ -324,7 +324,7 @@ impl CollisionStage {
         }
         let (nearest, normal) = (&self.nearest, &self.normal);
         let lists = Disjoint::new(&mut self.edge_blocks[..]);
-        sum_over_count(blocks, threads, |k| {
+        team.sum_count(blocks, |k| {
             // SAFETY: block `k` alone uses list `k`.
             let list = unsafe { &mut lists.range(k..k + 1)[0] };
             list.clear();

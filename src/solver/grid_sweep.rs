@@ -16,7 +16,7 @@
 //! more stretched: the boundary springs then lag a whole sweep.)
 
 use crate::cloth::{Grid, SpringKind, Springs};
-use crate::parallel::{sum_over, Disjoint};
+use crate::parallel::{Disjoint, Team};
 
 /// Structure-of-arrays positions (m) and inverse masses (1/kg), in the
 /// plan's lane order ([`GridPlan::lane`]).
@@ -105,9 +105,18 @@ pub(crate) struct GridPlan {
     lambda: [Vec<f32>; 6],
 }
 
-/// Below this many springs, a phase of a pass runs on one thread: waking
-/// another costs more than it saves.
+/// Below this many springs, a phase of a pass runs on one thread: handing
+/// it out costs more than it saves.
 const PARALLEL_MIN_SPRINGS: usize = 2048;
+
+/// The team for a phase of `springs` springs: alone when they are few.
+fn team_for(team: Team, springs: usize) -> Team {
+    if springs >= PARALLEL_MIN_SPRINGS {
+        team
+    } else {
+        Team::ALONE
+    }
+}
 
 /// Rows a band has at least: more bands would leave too little work to a
 /// thread, and a boundary's rows (two either side) must not reach the next.
@@ -308,9 +317,9 @@ impl GridPlan {
 
     /// Runs `f` on the particles of each band of rows (a range of particle
     /// indices, which is also the band's range of lanes: lanes only reorder
-    /// a row), on rayon's threads with `threads`.
-    pub fn for_each_band(&self, threads: bool, f: impl Fn(std::ops::Range<usize>) + Sync + Send) {
-        sum_over(&self.phases[0], threads, |band| {
+    /// a row), on the `team`'s threads.
+    pub fn for_each_band(&self, team: Team, f: impl Fn(std::ops::Range<usize>) + Sync) {
+        team.sum_over(&self.phases[0], |band| {
             f(band.lanes.clone());
             0
         });
@@ -406,14 +415,14 @@ impl<'a> SharedLanes<'a> {
 
 /// One Gauss–Seidel sweep over every spring: pass by pass in the plan's
 /// order, each pass over the bands, then the boundaries; on several
-/// threads with `threads`, with the same bits.
+/// threads of `team`, with the same bits.
 pub(crate) fn sweep(
     plan: &mut GridPlan,
     lanes: &mut Lanes,
     compliance: &[Compliance; 3],
-    threads: bool,
+    team: Team,
 ) {
-    sweep_with(plan, lanes, compliance, threads, simd_available());
+    sweep_with(plan, lanes, compliance, team, simd_available());
 }
 
 /// True when the CPU has AVX2 (the vectorised kernels run there).
@@ -429,7 +438,7 @@ fn sweep_with(
     plan: &mut GridPlan,
     lanes: &mut Lanes,
     compliance: &[Compliance; 3],
-    threads: bool,
+    team: Team,
     simd: bool,
 ) {
     let shared = SharedLanes::new(lanes, &mut plan.lambda);
@@ -437,25 +446,21 @@ fn sweep_with(
     let rest: [&[f32]; 6] = std::array::from_fn(|p| &plan.passes[p].rest[..]);
     for p in 0..6 {
         for (phase, work) in plan.phases.iter().zip(&plan.work) {
-            sum_over(
-                phase,
-                threads && work[p] >= PARALLEL_MIN_SPRINGS,
-                |region| {
-                    // SAFETY: the regions of a phase touch disjoint lanes (the plan
-                    // is built so, and tested), so the views alive at once are
-                    // disjoint; `lanes` and the passes are borrowed for the sweep.
-                    let (mut view, mut lambda) = unsafe { shared.view(region.lanes.clone()) };
-                    #[cfg(target_arch = "x86_64")]
-                    if simd {
-                        // SAFETY: `simd` only when the CPU has AVX2.
-                        unsafe { sweep_region_avx2(region, p, &rest, &k, &mut view, &mut lambda) };
-                        return 0;
-                    }
-                    let _ = simd;
-                    sweep_region(region, p, &rest, &k, &mut view, &mut lambda);
-                    0
-                },
-            );
+            team_for(team, work[p]).sum_over(phase, |region| {
+                // SAFETY: the regions of a phase touch disjoint lanes (the plan
+                // is built so, and tested), so the views alive at once are
+                // disjoint; `lanes` and the passes are borrowed for the sweep.
+                let (mut view, mut lambda) = unsafe { shared.view(region.lanes.clone()) };
+                #[cfg(target_arch = "x86_64")]
+                if simd {
+                    // SAFETY: `simd` only when the CPU has AVX2.
+                    unsafe { sweep_region_avx2(region, p, &rest, &k, &mut view, &mut lambda) };
+                    return 0;
+                }
+                let _ = simd;
+                sweep_region(region, p, &rest, &k, &mut view, &mut lambda);
+                0
+            });
         }
     }
 }
@@ -497,7 +502,7 @@ pub(crate) fn limit_stretch(
     plan: &mut GridPlan,
     lanes: &mut Lanes,
     factor: f32,
-    threads: bool,
+    team: Team,
 ) -> u32 {
     if !factor.is_finite() {
         return 0;
@@ -510,8 +515,7 @@ pub(crate) fn limit_stretch(
         let mut over = 0;
         for p in (0..6).filter(|&p| stretch[p]) {
             for (phase, work) in plan.phases.iter().zip(&plan.work) {
-                let threads = threads && work[p] >= PARALLEL_MIN_SPRINGS;
-                over += sum_over(phase, threads, |region| {
+                over += team_for(team, work[p]).sum_over(phase, |region| {
                     // SAFETY: as in `sweep_with`: disjoint regions, borrowed buffers.
                     let (mut view, _) = unsafe { shared.view(region.lanes.clone()) };
                     let rest = &rest[p][region.lanes.clone()];
@@ -727,8 +731,8 @@ mod tests {
         let (mut plan_a, mut a) = setup();
         let (mut plan_b, mut b) = setup();
         for _ in 0..3 {
-            sweep(&mut plan_a, &mut a, &k, false);
-            sweep_with(&mut plan_b, &mut b, &k, false, false);
+            sweep(&mut plan_a, &mut a, &k, Team::ALONE);
+            sweep_with(&mut plan_b, &mut b, &k, Team::ALONE, false);
         }
         let bits = |l: &Lanes| -> Vec<u32> {
             l.x.iter()
@@ -841,8 +845,10 @@ mod tests {
                 .unwrap();
             let (mut plan, mut lanes) = (plan.clone(), lanes());
             let limited = pool.install(|| {
-                sweep(&mut plan, &mut lanes, &k, parallel);
-                limit_stretch(&mut plan, &mut lanes, 1.02, parallel)
+                crate::parallel::with_team(parallel, |team| {
+                    sweep(&mut plan, &mut lanes, &k, team);
+                    limit_stretch(&mut plan, &mut lanes, 1.02, team)
+                })
             });
             let bits: Vec<u32> = lanes
                 .x
@@ -881,7 +887,7 @@ mod tests {
                 alpha: 0.0,
                 gamma: 0.0,
             };
-            sweep(&mut plan, &mut lanes, &[k; 3], false);
+            sweep(&mut plan, &mut lanes, &[k; 3], Team::ALONE);
             // Stretched by 10%, the sweep pulls every row back inwards.
             let last = plan.lane(cols - 1);
             assert!(

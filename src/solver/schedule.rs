@@ -21,6 +21,7 @@ use crate::context::StepContext;
 use crate::error::{positive, ClothError};
 use crate::forces::{ForceModel, Masses};
 use crate::math::Vector;
+use crate::parallel::{with_team, Team};
 
 impl ClothSolver {
     /// Advances `cloth` by `dt` seconds among `obstacles`.
@@ -56,7 +57,6 @@ impl ClothSolver {
             }
         }
         let k = self.substeps_for(cloth, dt);
-        let h = dt / k as f32;
         let n = cloth.particle_count();
         let ws = &mut self.workspace;
         ws.resize(n);
@@ -72,6 +72,40 @@ impl ClothSolver {
             &cloth.topology.springs,
         );
 
+        // Below a few thousand particles the loops are too short to share.
+        let threads = self.settings.parallel && n >= TEAM_MIN_PARTICLES;
+        let report = with_team(threads, |team| {
+            self.substeps(cloth, obstacles, (dt, k), team)
+        })?;
+        // Divergence check.
+        if !is_sane(cloth) {
+            let integrator = self.settings.integrator;
+            restore(cloth, &self.workspace);
+            let suggested = stable_substeps(cloth, integrator, dt).max(2 * k);
+            return Err(ClothError::Diverged {
+                integrator: integrator.name(),
+                dt,
+                substeps: k,
+                suggested_substeps: suggested,
+            });
+        }
+        cloth.time += dt as f64;
+        self.steps += 1;
+        Ok(report)
+    }
+
+    /// The substeps of a step of `dt` seconds in `k` substeps, on the
+    /// `team`'s threads; on an integrator's error the cloth is put back.
+    fn substeps(
+        &mut self,
+        cloth: &mut Cloth,
+        obstacles: &[Obstacle],
+        (dt, k): (f32, u32),
+        team: Team,
+    ) -> Result<StepReport, ClothError> {
+        let h = dt / k as f32;
+        let edges = self.settings.edge_collisions;
+        let ws = &mut self.workspace;
         let mut report = StepReport {
             substeps: k,
             ..Default::default()
@@ -117,6 +151,7 @@ impl ClothSolver {
                 obstacles,
                 mass_revision: cloth.mass_revision,
                 grid: cloth.topology.grid,
+                team,
             };
             let outcome = match integrate(&sub, x, v, &mut self.state, ws) {
                 Ok(outcome) => outcome,
@@ -151,27 +186,16 @@ impl ClothSolver {
                 ResolveOptions {
                     friction: outcome.friction,
                     edges,
-                    threads: self.settings.parallel,
+                    team,
                 },
             );
         }
-        // Divergence check.
-        if !is_sane(cloth) {
-            let integrator = self.settings.integrator;
-            restore(cloth, &self.workspace);
-            let suggested = stable_substeps(cloth, integrator, dt).max(2 * k);
-            return Err(ClothError::Diverged {
-                integrator: integrator.name(),
-                dt,
-                substeps: k,
-                suggested_substeps: suggested,
-            });
-        }
-        cloth.time += dt as f64;
-        self.steps += 1;
         Ok(report)
     }
 }
+
+/// Particles from which a step's loops are shared among threads.
+const TEAM_MIN_PARTICLES: usize = 2048;
 
 /// Puts the cloth back as it was at the start of the step.
 fn restore(cloth: &mut Cloth, ws: &super::workspace::Workspace) {

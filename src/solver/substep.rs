@@ -4,6 +4,7 @@ use crate::cloth::Grid;
 use crate::collision::Obstacle;
 use crate::context::StepContext;
 use crate::forces::ForceModel;
+use crate::parallel::Team;
 
 use super::settings::SolverSettings;
 
@@ -21,4 +22,6 @@ pub(crate) struct Substep<'a> {
     pub mass_revision: u64,
     /// The grid the cloth was built on, if any (for grid-specialised kernels).
     pub grid: Option<Grid>,
+    /// The threads the substep's loops may run on.
+    pub team: Team<'a>,
 }

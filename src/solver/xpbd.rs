@@ -98,13 +98,13 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
     match (&mut ws.plan, sub.grid) {
         (Some(plan), Some(_)) => {
             plan.reset();
-            let threads = sub.settings.parallel;
+            let team = sub.team;
             let l = &mut ws.lanes;
             l.resize(n);
             // Predict, and copy into the lanes: positions now, at the
             // substep's start, and inverse masses; band by band.
             let (xs, vs, lanes) = (Disjoint::new(x), Disjoint::new(v), l.disjoint());
-            plan.for_each_band(threads, |band| {
+            plan.for_each_band(team, |band| {
                 // SAFETY: bands are disjoint ranges of particles and of lanes.
                 let ([x, v], [lx, ly, lz, sx, sy, sz, lw]) = unsafe {
                     (
@@ -122,12 +122,12 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
                 }
             });
             for _ in 0..sub.settings.xpbd_iterations {
-                sweep(plan, l, &compliance, threads);
+                sweep(plan, l, &compliance, team);
             }
-            limit_stretch(plan, l, model.stretch_limit, threads);
+            limit_stretch(plan, l, model.stretch_limit, team);
             // Velocities from the motion: `x` still holds the prediction.
             let (xs, vs, lanes) = (Disjoint::new(x), Disjoint::new(v), l.disjoint());
-            plan.for_each_band(threads, |band| {
+            plan.for_each_band(team, |band| {
                 // SAFETY: as above.
                 let ([x, v], [lx, ly, lz, ..]) = unsafe {
                     (
