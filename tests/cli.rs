@@ -353,6 +353,42 @@ fn bench_takes_the_substeps_and_sweeps_it_is_given() {
 }
 
 #[test]
+fn bench_runs_each_row_on_each_thread_count() {
+    let args = [
+        "bench",
+        "--n",
+        "48",
+        "--integrator",
+        "xpbd",
+        "--threads",
+        "1",
+        "--threads",
+        "2",
+        "--warmup",
+        "1",
+        "--frames",
+        "1",
+        "--no-rapier",
+        "--json",
+    ];
+    if !cfg!(feature = "parallel") {
+        let out = cloth3d(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains("--features parallel"), "{stderr}");
+        return;
+    }
+    let rows = json_lines(&cloth3d_ok(&args));
+    let threads: Vec<u64> = rows
+        .iter()
+        .map(|r| r["threads"].as_u64().unwrap())
+        .collect();
+    assert_eq!(threads, [1, 2], "{rows:?}");
+    // The same physics on either: the stretch over the run is the same number.
+    assert_eq!(rows[0]["max_stretch"], rows[1]["max_stretch"], "{rows:?}");
+}
+
+#[test]
 fn export_scene_writes_the_solver_flags_and_run_uses_them() {
     let dir = std::env::temp_dir().join(format!("cloth3d-export-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

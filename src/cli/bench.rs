@@ -258,10 +258,8 @@ pub fn target_lines(rows: &[BenchRow]) -> Vec<String> {
         }
     }
     // The real-time targets of the small-steps solver (one thread, drape).
-    for row in rows
-        .iter()
-        .filter(|r| r.engine == "cloth3d" && r.integrator == Integrator::Xpbd.name())
-    {
+    let xpbd = |r: &&BenchRow| r.engine == "cloth3d" && r.integrator == Integrator::Xpbd.name();
+    for row in rows.iter().filter(xpbd).filter(|r| r.threads == 1) {
         let budget = match row.n {
             64 => Some(2.0),
             128 => Some(8.0),
@@ -293,7 +291,30 @@ pub fn target_lines(rows: &[BenchRow]) -> Vec<String> {
             ));
         }
     }
-    for row in rows.iter().filter(|r| r.engine == "cloth3d") {
+    // Two threads against one, on the same scene and size.
+    for two in rows
+        .iter()
+        .filter(xpbd)
+        .filter(|r| r.threads == 2 && r.n == 128)
+    {
+        let one = rows
+            .iter()
+            .filter(xpbd)
+            .find(|r| r.threads == 1 && r.n == two.n && r.scene == two.scene);
+        if let Some(one) = one {
+            let x = one.frame_wall_s / two.frame_wall_s.max(1e-12);
+            lines.push(format!(
+                "{} N={} 2 threads >= 1.7x one: {x:.2}x ({})",
+                two.integrator,
+                two.n,
+                verdict(x / 1.7)
+            ));
+        }
+    }
+    for row in rows
+        .iter()
+        .filter(|r| r.engine == "cloth3d" && r.threads == 1)
+    {
         if let Some(x) = row.speedup_vs_rapier {
             lines.push(format!(
                 "{} N={} >= 3x rapier's cloth: {x:.2}x ({})",
@@ -345,5 +366,15 @@ mod tests {
         assert!(find("xpbd N=128 <= 8 ms").ends_with("(missed by 2.0x)"));
         assert!(find("xpbd N=128 stretch < 5%").ends_with("(met)"));
         assert!(find("xpbd N=128 >= 10x").ends_with("(missed by 1.7x)"));
+        // Two threads against one; the one-thread targets only from one thread.
+        let two = BenchRow {
+            threads: 2,
+            ..row("xpbd", 8.0, None)
+        };
+        let lines = target_lines(&[row("xpbd", 16.0, None), two.clone()]);
+        let find = |s: &str| lines.iter().find(|l| l.starts_with(s)).cloned().unwrap();
+        assert!(find("xpbd N=128 2 threads >= 1.7x one: 2.00x").ends_with("(met)"));
+        assert_eq!(lines.iter().filter(|l| l.contains("<= 8 ms")).count(), 1);
+        assert!(target_lines(&[two]).is_empty());
     }
 }

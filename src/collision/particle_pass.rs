@@ -33,7 +33,7 @@ pub(super) struct HandedImpulse {
 
 /// Scratch of one block: the candidates of its current particle, and the
 /// momentum its particles handed to obstacles, in particle order.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub(super) struct BlockScratch {
     candidates: Vec<u32>,
     pub impulses: Vec<HandedImpulse>,
@@ -67,6 +67,17 @@ pub(super) struct ParticlePass<'a> {
     pub friction: FrictionPolicy,
     /// Beyond this distance (m) an obstacle is neither touched nor near.
     pub far: f32,
+}
+
+impl Default for BlockScratch {
+    /// Room for a contact per particle, so that a warmed-up step seldom allocates.
+    fn default() -> Self {
+        BlockScratch {
+            candidates: Vec::new(),
+            impulses: Vec::with_capacity(BLOCK),
+            strays: 0,
+        }
+    }
 }
 
 impl ParticlePass<'_> {

@@ -84,7 +84,14 @@ impl CollisionStage {
     /// the edge pass need look at no other.
     pub fn cache_candidates(&mut self, x: &[Vector], margin: f32, springs: &Springs) {
         self.tracks.cache_candidates(x, margin);
+        // Room for the most the edge pass can list, so that no substep allocates.
+        let most = springs.count(SpringKind::Stretch) + springs.count(SpringKind::Shear);
         self.edge_watch.clear();
+        self.edge_watch.reserve(most);
+        if self.edge_blocks.len() < most.div_ceil(EDGE_BLOCK) {
+            self.edge_blocks
+                .resize_with(most.div_ceil(EDGE_BLOCK), || Vec::with_capacity(EDGE_BLOCK));
+        }
         for s in edge_springs(springs) {
             let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
             if self.tracks.has_cached(a) || self.tracks.has_cached(b) {

@@ -29,9 +29,10 @@ pub struct BenchArgs {
     /// Frames timed (the median is reported).
     #[arg(long, value_parser = parse_frames, default_value = "10", allow_hyphen_values = true)]
     pub frames: u32,
-    /// Threads (only 1 until the parallel step lands).
-    #[arg(long, value_parser = parse_frames, default_value = "1", allow_hyphen_values = true)]
-    pub threads: u32,
+    /// Threads a cloth3d row runs on (repeatable: each row once per count;
+    /// more than 1 needs the `parallel` feature). Rapier's cloth runs on one.
+    #[arg(long, value_parser = parse_frames, default_values = ["1"], allow_hyphen_values = true)]
+    pub threads: Vec<u32>,
     /// Substeps per frame for every row (`auto` or a count; default: each integrator's own).
     #[arg(long, value_parser = parse_substeps)]
     pub substeps: Option<Substeps>,
@@ -55,40 +56,60 @@ const FMS_MAX_N: usize = 256;
 
 /// Times the rows and prints them (a table, or JSON lines), with the targets.
 pub fn bench_command(args: BenchArgs) -> ExitCode {
-    #[cfg(not(feature = "parallel"))]
-    if args.threads != 1 {
-        eprintln!(
-            "error: --threads {}: this build is single-threaded; build with --features parallel",
-            args.threads
-        );
-        return ExitCode::from(2);
-    }
-    #[cfg(feature = "parallel")]
-    {
-        let pool = match rayon::ThreadPoolBuilder::new()
-            .num_threads(args.threads as usize)
-            .build()
-        {
-            Ok(pool) => pool,
+    let mut pools = Vec::new();
+    for &threads in &args.threads {
+        match Threads::start(threads) {
+            Ok(pool) => pools.push(pool),
             Err(e) => {
-                eprintln!("error: cannot start {} threads: {e}", args.threads);
+                eprintln!("error: --threads {threads}: {e}");
                 return ExitCode::from(2);
             }
-        };
-        pool.install(|| bench_rows(&args))
+        }
     }
-    #[cfg(not(feature = "parallel"))]
-    bench_rows(&args)
+    bench_rows(&args, &pools)
 }
 
-fn bench_rows(args: &BenchArgs) -> ExitCode {
+/// A thread count the rows run on: a rayon pool of that many threads.
+struct Threads {
+    #[cfg(feature = "parallel")]
+    pool: rayon::ThreadPool,
+}
+
+impl Threads {
+    fn start(threads: u32) -> Result<Threads, String> {
+        #[cfg(feature = "parallel")]
+        {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads as usize)
+                .build()
+                .map(|pool| Threads { pool })
+                .map_err(|e| format!("cannot start the threads: {e}"))
+        }
+        #[cfg(not(feature = "parallel"))]
+        match threads {
+            1 => Ok(Threads {}),
+            _ => Err("this build is single-threaded; build with --features parallel".into()),
+        }
+    }
+
+    /// Runs `f` on these threads.
+    fn run<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
+        #[cfg(feature = "parallel")]
+        return self.pool.install(f);
+        #[cfg(not(feature = "parallel"))]
+        f()
+    }
+}
+
+fn bench_rows(args: &BenchArgs, pools: &[Threads]) -> ExitCode {
     use cloth3d::cli::bench::{bench_cloth3d, bench_rapier_drape, BenchRow};
     if !args.json {
         emit(&format!(
-            "{:<8} {:>5} {:<18} {:>8} {:>11} {:>14} {:>14} {:>9} {:>9} {:>9}\n",
+            "{:<8} {:>5} {:<18} {:>3} {:>8} {:>11} {:>14} {:>14} {:>9} {:>9} {:>9}\n",
             "scene",
             "n",
             "integrator",
+            "thr",
             "substeps",
             "ms/frame",
             "part.sub/s",
@@ -116,10 +137,11 @@ fn bench_rows(args: &BenchArgs) -> ExitCode {
             ));
         } else {
             emit(&format!(
-                "{:<8} {:>5} {:<18} {:>8} {:>11.2} {:>14.3e} {:>14} {:>8.2}% {:>8.4} {:>9}\n",
+                "{:<8} {:>5} {:<18} {:>3} {:>8} {:>11.2} {:>14.3e} {:>14} {:>8.2}% {:>8.4} {:>9}\n",
                 row.scene,
                 row.n,
                 row.integrator,
+                row.threads,
                 row.substeps,
                 1000.0 * row.frame_wall_s,
                 row.particle_substeps_per_s,
@@ -148,14 +170,17 @@ fn bench_rows(args: &BenchArgs) -> ExitCode {
                     }
                     continue;
                 }
-                match bench_cloth3d(kind, n, integrator, (args.warmup, args.frames), &tuning) {
-                    Ok(mut row) => {
-                        row.speedup_vs_rapier = rapier
-                            .as_ref()
-                            .map(|r| r.frame_wall_s / row.frame_wall_s.max(1e-12));
-                        print(&row);
+                for pool in pools {
+                    let frames = (args.warmup, args.frames);
+                    match pool.run(|| bench_cloth3d(kind, n, integrator, frames, &tuning)) {
+                        Ok(mut row) => {
+                            row.speedup_vs_rapier = rapier
+                                .as_ref()
+                                .map(|r| r.frame_wall_s / row.frame_wall_s.max(1e-12));
+                            print(&row);
+                        }
+                        Err(e) => eprintln!("{} N={n} {}: {e}", kind.name(), integrator.name()),
                     }
-                    Err(e) => eprintln!("{} N={n} {}: {e}", kind.name(), integrator.name()),
                 }
             }
         }
