@@ -32,8 +32,10 @@ pub(super) struct HandedImpulse {
 }
 
 /// Scratch of one block: the candidates of its current particle, and the
-/// momentum its particles handed to obstacles, in particle order.
+/// momentum its particles handed to obstacles, in particle order. Alone on
+/// its cache lines: blocks on different threads write their scratch at once.
 #[derive(Debug)]
+#[repr(align(128))]
 pub(super) struct BlockScratch {
     candidates: Vec<u32>,
     pub impulses: Vec<HandedImpulse>,

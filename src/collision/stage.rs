@@ -50,11 +50,17 @@ pub struct CollisionStage {
     /// Per block of the particle pass: its scratch.
     blocks: Vec<BlockScratch>,
     /// Per block of [`EDGE_BLOCK`] springs: those the edge pass must look at.
-    edge_blocks: Vec<Vec<u32>>,
+    edge_blocks: Vec<EdgeList>,
     /// The stretch and shear springs that may come near an obstacle this
     /// step, in spring order ([`CollisionStage::cache_candidates`]).
     edge_watch: Vec<u32>,
 }
+
+/// The springs of a block of the edge pass that it must look at, alone on
+/// its cache lines (blocks on different threads push at once).
+#[derive(Debug, Default)]
+#[repr(align(128))]
+struct EdgeList(Vec<u32>);
 
 /// The springs the edge pass keeps out of obstacles: stretch, then shear.
 fn edge_springs(springs: &Springs) -> impl Iterator<Item = usize> {
@@ -90,7 +96,9 @@ impl CollisionStage {
         self.edge_watch.reserve(most);
         if self.edge_blocks.len() < most.div_ceil(EDGE_BLOCK) {
             self.edge_blocks
-                .resize_with(most.div_ceil(EDGE_BLOCK), || Vec::with_capacity(EDGE_BLOCK));
+                .resize_with(most.div_ceil(EDGE_BLOCK), || {
+                    EdgeList(Vec::with_capacity(EDGE_BLOCK))
+                });
         }
         for s in edge_springs(springs) {
             let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
@@ -327,13 +335,13 @@ impl CollisionStage {
         };
         let blocks = count.div_ceil(EDGE_BLOCK);
         if self.edge_blocks.len() < blocks {
-            self.edge_blocks.resize_with(blocks, Vec::new);
+            self.edge_blocks.resize_with(blocks, EdgeList::default);
         }
         let (nearest, normal) = (&self.nearest, &self.normal);
         let lists = Disjoint::new(&mut self.edge_blocks[..]);
         team.sum_count(blocks, |k| {
             // SAFETY: block `k` alone uses list `k`.
-            let list = unsafe { &mut lists.range(k..k + 1)[0] };
+            let list = unsafe { &mut lists.range(k..k + 1)[0].0 };
             list.clear();
             for s in (k * EDGE_BLOCK..((k + 1) * EDGE_BLOCK).min(count)).map(spring) {
                 let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
@@ -349,7 +357,7 @@ impl CollisionStage {
             0
         });
         let lists = std::mem::take(&mut self.edge_blocks);
-        for &s in lists[..blocks].iter().flatten() {
+        for &s in lists[..blocks].iter().flat_map(|l| &l.0) {
             let s = s as usize;
             let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
             let (oa, ob) = (self.nearest[a], self.nearest[b]);
