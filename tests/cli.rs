@@ -371,13 +371,6 @@ fn bench_runs_each_row_on_each_thread_count() {
         "--no-rapier",
         "--json",
     ];
-    if !cfg!(feature = "parallel") {
-        let out = cloth3d(&args);
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{stderr}");
-        assert!(stderr.contains("--features parallel"), "{stderr}");
-        return;
-    }
     let rows = json_lines(&cloth3d_ok(&args));
     let threads: Vec<u64> = rows
         .iter()

@@ -95,10 +95,9 @@ impl CollisionStage {
         self.edge_watch.clear();
         self.edge_watch.reserve(most);
         if self.edge_blocks.len() < most.div_ceil(EDGE_BLOCK) {
-            self.edge_blocks
-                .resize_with(most.div_ceil(EDGE_BLOCK), || {
-                    EdgeList(Vec::with_capacity(EDGE_BLOCK))
-                });
+            self.edge_blocks.resize_with(most.div_ceil(EDGE_BLOCK), || {
+                EdgeList(Vec::with_capacity(EDGE_BLOCK))
+            });
         }
         for s in edge_springs(springs) {
             let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);

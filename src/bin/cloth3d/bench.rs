@@ -29,8 +29,8 @@ pub struct BenchArgs {
     /// Frames timed (the median is reported).
     #[arg(long, value_parser = parse_frames, default_value = "10", allow_hyphen_values = true)]
     pub frames: u32,
-    /// Threads a cloth3d row runs on (repeatable: each row once per count;
-    /// more than 1 needs the `parallel` feature). Rapier's cloth runs on one.
+    /// Threads a cloth3d row runs on (repeatable: each row once per count).
+    /// Rapier's cloth runs on one.
     #[arg(long, value_parser = parse_frames, default_values = ["1"], allow_hyphen_values = true)]
     pub threads: Vec<u32>,
     /// Substeps per frame for every row (`auto` or a count; default: each integrator's own).
@@ -69,35 +69,24 @@ pub fn bench_command(args: BenchArgs) -> ExitCode {
     bench_rows(&args, &pools)
 }
 
-/// A thread count the rows run on: a rayon pool of that many threads.
+/// A thread count the rows run on: a rayon pool of that many threads (the
+/// `cli` feature brings `parallel` along).
 struct Threads {
-    #[cfg(feature = "parallel")]
     pool: rayon::ThreadPool,
 }
 
 impl Threads {
     fn start(threads: u32) -> Result<Threads, String> {
-        #[cfg(feature = "parallel")]
-        {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads as usize)
-                .build()
-                .map(|pool| Threads { pool })
-                .map_err(|e| format!("cannot start the threads: {e}"))
-        }
-        #[cfg(not(feature = "parallel"))]
-        match threads {
-            1 => Ok(Threads {}),
-            _ => Err("this build is single-threaded; build with --features parallel".into()),
-        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads as usize)
+            .build()
+            .map(|pool| Threads { pool })
+            .map_err(|e| format!("cannot start the threads: {e}"))
     }
 
     /// Runs `f` on these threads.
     fn run<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
-        #[cfg(feature = "parallel")]
-        return self.pool.install(f);
-        #[cfg(not(feature = "parallel"))]
-        f()
+        self.pool.install(f)
     }
 }
 
