@@ -7,6 +7,7 @@ use crate::cloth::{
     Cloth, Material, Particles, PhysicsParams, SpringKind, SpringParams, Springs, Topology, Wind,
 };
 use crate::math::Vector;
+use crate::parallel::Team;
 
 /// Force on particle `a` from a spring joining it to `b`, in newtons:
 /// `k (|x_ab| - L) d + c ((v_b - v_a)·d) d` with `d` the unit vector from `a`
@@ -51,22 +52,23 @@ pub fn wind_force_on_triangle(p0: Vector, p1: Vector, p2: Vector, wind: &Wind) -
 }
 
 /// Below this many springs a colour class is evaluated on one thread.
-#[cfg(feature = "parallel")]
 const PARALLEL_MIN: usize = 4096;
+
+/// Springs of a class a thread takes at a time.
+const PARALLEL_CHUNK: usize = 2048;
 
 /// Adds the spring forces (elastic and damping) of every spring into `f`.
 ///
-/// Springs are stored colour class by colour class; with `parallel` (and the
-/// `parallel` feature) each large class is split across threads. A particle
-/// meets each class at most once, so it sums its forces in storage order
-/// either way: the result is bit-identical to the single-threaded one.
+/// Springs are stored colour class by colour class; on a `team` of several
+/// threads each large class is split among them. A particle meets each
+/// class at most once, so it sums its forces in storage order either way:
+/// the result is bit-identical to the single-threaded one.
 pub(crate) fn add_spring_forces(
     springs: &Springs,
     params: &[SpringParams; 3],
-    x: &[Vector],
-    v: &[Vector],
+    (x, v): (&[Vector], &[Vector]),
     f: &mut [Vector],
-    parallel: bool,
+    team: Team,
 ) {
     let (a, b, rest) = (&springs.a[..], &springs.b[..], &springs.rest[..]);
     let serial = |range: std::ops::Range<usize>, p: SpringParams, f: &mut [Vector]| {
@@ -77,7 +79,7 @@ pub(crate) fn add_spring_forces(
             f[j] -= force;
         }
     };
-    if !parallel || springs.colour_ranges.is_empty() {
+    if team.is_alone() || springs.colour_ranges.is_empty() {
         for kind in SpringKind::ALL {
             serial(springs.range(kind), params[kind.index()], f);
         }
@@ -85,54 +87,63 @@ pub(crate) fn add_spring_forces(
     }
     for (range, &disjoint) in springs.colour_ranges.iter().zip(&springs.colour_disjoint) {
         let p = params[springs.kind(range.start).index()];
-        #[cfg(feature = "parallel")]
         if disjoint && range.len() >= PARALLEL_MIN {
-            parallel_class(springs, range.clone(), p, x, v, f);
-            continue;
+            parallel_class(springs, (range.clone(), p), (x, v), f, team);
+        } else {
+            serial(range.clone(), p, f);
         }
-        let _ = disjoint;
-        serial(range.clone(), p, f);
     }
 }
 
 /// A pointer to the force buffer that threads may share because they write
 /// disjoint elements.
-#[cfg(feature = "parallel")]
 #[derive(Clone, Copy)]
 struct SharedForces(*mut Vector);
-#[cfg(feature = "parallel")]
 // SAFETY: only used by `parallel_class`, whose threads write disjoint elements.
 unsafe impl Send for SharedForces {}
-#[cfg(feature = "parallel")]
 // SAFETY: as above.
 unsafe impl Sync for SharedForces {}
 
-#[cfg(feature = "parallel")]
+impl SharedForces {
+    /// The force of particle `i`.
+    ///
+    /// # Safety
+    /// `i` is in bounds, and no other thread uses element `i` meanwhile.
+    unsafe fn at(self, i: usize) -> *mut Vector {
+        // SAFETY: in bounds by the caller's promise.
+        unsafe { self.0.add(i) }
+    }
+}
+
+/// One colour class's springs, `range` with parameters `p`, on the team.
 fn parallel_class(
     springs: &Springs,
-    range: std::ops::Range<usize>,
-    p: SpringParams,
-    x: &[Vector],
-    v: &[Vector],
+    (range, p): (std::ops::Range<usize>, SpringParams),
+    (x, v): (&[Vector], &[Vector]),
     f: &mut [Vector],
+    team: Team,
 ) {
     let (a, b, rest) = (&springs.a[..], &springs.b[..], &springs.rest[..]);
-    use rayon::prelude::*;
     let n = f.len();
     let out = SharedForces(f.as_mut_ptr());
-    range.into_par_iter().with_min_len(1024).for_each(move |s| {
-        let out = out;
-        let (i, j) = (a[s] as usize, b[s] as usize);
-        let force = spring_force(x[i], x[j], v[i], v[j], rest[s], p);
-        if i < n && j < n {
-            // SAFETY: `i` and `j` are in bounds (checked above and validated when
-            // the cloth was built), and within one colour class no two springs
-            // share a particle, so no other thread touches f[i] or f[j] now.
-            unsafe {
-                *out.0.add(i) += force;
-                *out.0.add(j) -= force;
+    let chunks = range.len().div_ceil(PARALLEL_CHUNK);
+    team.sum_count(chunks, |c| {
+        let first = range.start + c * PARALLEL_CHUNK;
+        for s in first..(first + PARALLEL_CHUNK).min(range.end) {
+            let (i, j) = (a[s] as usize, b[s] as usize);
+            let force = spring_force(x[i], x[j], v[i], v[j], rest[s], p);
+            if i < n && j < n {
+                // SAFETY: `i` and `j` are in bounds (checked above and
+                // validated when the cloth was built), and within one colour
+                // class no two springs share a particle, so no other thread
+                // touches f[i] or f[j] now.
+                unsafe {
+                    *out.at(i) += force;
+                    *out.at(j) -= force;
+                }
             }
         }
+        0
     });
 }
 
@@ -162,7 +173,8 @@ pub(crate) struct ForceModel<'a> {
     pub gravity: Vector,
     pub air_drag: f32,
     pub wind: Wind,
-    pub parallel: bool,
+    /// The threads that may evaluate spring forces.
+    pub team: Team<'a>,
 }
 
 /// The masses of a cloth's particles, borrowed apart from its positions
@@ -186,14 +198,13 @@ impl<'a> Masses<'a> {
 }
 
 impl<'a> ForceModel<'a> {
-    /// The force model of a cloth's parts; `parallel` evaluates spring
-    /// forces on several threads (with the `parallel` feature).
+    /// The force model of a cloth's parts; spring forces on the `team`'s threads.
     pub fn new(
         topology: &'a Topology,
         material: &Material,
         masses: Masses<'a>,
         physics: &PhysicsParams,
-        parallel: bool,
+        team: Team<'a>,
     ) -> Self {
         ForceModel {
             springs: &topology.springs,
@@ -205,7 +216,7 @@ impl<'a> ForceModel<'a> {
             gravity: physics.gravity,
             air_drag: physics.air_drag,
             wind: physics.wind,
-            parallel,
+            team,
         }
     }
 
@@ -214,7 +225,7 @@ impl<'a> ForceModel<'a> {
         for i in 0..f.len() {
             f[i] = (self.gravity - v[i] * self.air_drag) * self.mass[i];
         }
-        add_spring_forces(self.springs, &self.spring_params, x, v, f, self.parallel);
+        add_spring_forces(self.springs, &self.spring_params, (x, v), f, self.team);
         add_wind_forces(self.triangles, &self.wind, x, f);
     }
 
@@ -246,7 +257,7 @@ impl Cloth {
             &self.material,
             Masses::of(&self.particles),
             &self.params,
-            false,
+            Team::ALONE,
         );
         model.forces(&self.particles.x, &self.particles.v, f);
     }

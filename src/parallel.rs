@@ -86,6 +86,14 @@ impl Team<'static> {
 }
 
 impl Team<'_> {
+    /// True when the loops run in order on the calling thread.
+    pub(crate) fn is_alone(self) -> bool {
+        #[cfg(feature = "parallel")]
+        return self.shared.is_none();
+        #[cfg(not(feature = "parallel"))]
+        true
+    }
+
     /// Runs `f` on every item and sums what it returns.
     pub(crate) fn sum_over<I: Sync>(self, items: &[I], f: impl Fn(&I) -> u32 + Sync) -> u32 {
         self.sum_count(items.len(), |k| f(&items[k]))
@@ -141,6 +149,22 @@ mod team {
     /// The low half of a ticket or cursor: an item count or index; the high
     /// half numbers the loops.
     const LOW: u64 = u32::MAX as u64;
+
+    /// Spins a moment, then gives the CPU away each time: a thread that
+    /// waits long (its partner descheduled, or sharing its CPU with it)
+    /// must not hold the CPU the partner needs.
+    fn pause(waited: &mut u32) {
+        if *waited < SPINS {
+            *waited += 1;
+            std::hint::spin_loop();
+        } else {
+            std::thread::yield_now();
+        }
+    }
+
+    /// Spins before a waiting thread yields: some tens of microseconds, about
+    /// the serial stretches between a substep's loops.
+    const SPINS: u32 = 1 << 12;
 
     /// One member's next item, alone on its cache line (members claim
     /// items of each other's shares when theirs run out).
@@ -207,8 +231,9 @@ mod team {
             self.work(0, number, count);
             // Helpers may still be on their last items; `job` must live until
             // they finish (no item is claimed once all are).
+            let mut waited = 0u32;
             while u64::from(self.done.load(Ordering::Acquire)) < count {
-                std::hint::spin_loop();
+                pause(&mut waited);
             }
             assert!(
                 !self.panicked.load(Ordering::Relaxed),
@@ -274,13 +299,8 @@ mod team {
                     self.work(me, number, ticket & LOW);
                     seen = number;
                     idle = 0;
-                } else if idle < 1 << 16 {
-                    idle += 1;
-                    std::hint::spin_loop();
                 } else {
-                    // Long without work (the caller between substeps, or
-                    // descheduled): let other threads run.
-                    std::thread::yield_now();
+                    pause(&mut idle);
                 }
             }
         }

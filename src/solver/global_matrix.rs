@@ -340,7 +340,7 @@ mod tests {
             &cloth.material,
             Masses::of(&cloth.particles),
             &cloth.params,
-            false,
+            crate::parallel::Team::ALONE,
         );
         let h = 1.0 / 60.0;
         let key = key(&model, h, n * n, cloth.mass_revision());

@@ -18,45 +18,43 @@
 use crate::cloth::{Grid, SpringKind, Springs};
 use crate::parallel::{Disjoint, Team};
 
-/// Structure-of-arrays positions (m) and inverse masses (1/kg), in the
-/// plan's lane order ([`GridPlan::lane`]).
-#[derive(Debug, Default)]
-pub(crate) struct Lanes {
-    pub x: Vec<f32>,
-    pub y: Vec<f32>,
-    pub z: Vec<f32>,
-    /// Positions at the start of the substep.
-    pub sx: Vec<f32>,
-    pub sy: Vec<f32>,
-    pub sz: Vec<f32>,
-    pub w: Vec<f32>,
+use super::staggered::Staggered;
+
+/// Structure-of-arrays positions (m), positions at the substep's start (m)
+/// and inverse masses (1/kg), in the plan's lane order ([`GridPlan::lane`]):
+/// x, y, z, start x, y, z, w, staggered ([`Staggered`]).
+#[derive(Debug)]
+pub(crate) struct Lanes(Staggered);
+
+/// Stagger slots: the lanes' 7 arrays, then the passes' multipliers, then
+/// their rest lengths, all read at the same index by the sweep.
+const LANE_SLOT: usize = 0;
+const LAMBDA_SLOT: usize = 7;
+const REST_SLOT: usize = 13;
+
+impl Default for Lanes {
+    fn default() -> Self {
+        Lanes(Staggered::new(7, 0, LANE_SLOT))
+    }
 }
 
 impl Lanes {
     /// Every array at `n` lanes.
     pub fn resize(&mut self, n: usize) {
-        for buf in self.arrays_mut() {
-            buf.resize(n, 0.0);
-        }
+        self.0.resize(n);
     }
 
     /// The arrays for threads to share by disjoint ranges: x, y, z, the
     /// substep-start x, y, z, and the inverse masses.
     pub fn disjoint(&mut self) -> [Disjoint<'_, f32>; 7] {
-        self.arrays_mut().map(|v| Disjoint::new(&mut v[..]))
+        let mut arrays = self.0.all_mut().map(Disjoint::new);
+        std::array::from_fn(|_| arrays.next().expect("seven arrays"))
     }
 
-    fn arrays_mut(&mut self) -> [&mut Vec<f32>; 7] {
-        let Lanes {
-            x,
-            y,
-            z,
-            sx,
-            sy,
-            sz,
-            w,
-        } = self;
-        [x, y, z, sx, sy, sz, w]
+    /// The arrays, to write: x, y, z, start x, y, z, w.
+    fn arrays_mut(&mut self) -> [&mut [f32]; 7] {
+        let mut arrays = self.0.all_mut();
+        std::array::from_fn(|_| arrays.next().expect("seven arrays"))
     }
 }
 
@@ -83,8 +81,6 @@ struct Pass {
     dr: usize,
     #[cfg_attr(not(test), allow(dead_code))]
     dc: isize,
-    /// Rest length (m) of the spring leaving each lane; 0 where none does.
-    rest: Vec<f32>,
 }
 
 /// The grid's springs as passes, when every spring is one of the six grid
@@ -102,7 +98,10 @@ pub(crate) struct GridPlan {
     work: [[usize; 6]; 2],
     /// Per pass: the multiplier over the substep's sweeps (N·s²) of the
     /// spring leaving each lane.
-    lambda: [Vec<f32>; 6],
+    lambda: Staggered,
+    /// Per pass: the rest length (m) of the spring leaving each lane; 0
+    /// where none does.
+    rest: Staggered,
 }
 
 /// Below this many springs, a phase of a pass runs on one thread: handing
@@ -249,15 +248,11 @@ impl GridPlan {
             (SpringKind::Bend, 0, 2, 4),
             (SpringKind::Bend, 2, 0, 4),
         ];
-        let mut passes: Vec<Pass> = families
+        let passes: Vec<Pass> = families
             .iter()
-            .map(|&(kind, dr, dc, _)| Pass {
-                kind,
-                dr,
-                dc,
-                rest: vec![0.0; n],
-            })
+            .map(|&(kind, dr, dc, _)| Pass { kind, dr, dc })
             .collect();
+        let mut rest = Staggered::new(6, n, REST_SLOT);
         let mut count = [0usize; 6];
         let (a, b) = springs.endpoints();
         for s in 0..springs.len() {
@@ -274,7 +269,7 @@ impl GridPlan {
             let f = families
                 .iter()
                 .position(|&(k, fr, fc, _)| k == kind && fr == dr && fc == dc)?;
-            let rest = &mut passes[f].rest[lane[i] as usize];
+            let rest = &mut rest.get_mut(f)[lane[i] as usize];
             if *rest != 0.0 {
                 return None; // the same spring twice
             }
@@ -305,7 +300,8 @@ impl GridPlan {
             passes,
             phases,
             work,
-            lambda: std::array::from_fn(|_| vec![0.0; n]),
+            lambda: Staggered::new(6, n, LAMBDA_SLOT),
+            rest,
         })
     }
 
@@ -327,7 +323,7 @@ impl GridPlan {
 
     /// Starts a substep: every spring's multiplier back to zero.
     pub fn reset(&mut self) {
-        for lambda in &mut self.lambda {
+        for lambda in self.lambda.all_mut() {
             lambda.fill(0.0);
         }
     }
@@ -368,24 +364,21 @@ struct View<'a> {
 
 impl<'a> SharedLanes<'a> {
     /// `lanes` and the passes' multipliers `lambda`, all of one length.
-    fn new(lanes: &'a mut Lanes, lambda: &'a mut [Vec<f32>; 6]) -> SharedLanes<'a> {
-        let len = lanes.x.len();
-        let lengths = [
-            &lanes.y, &lanes.z, &lanes.sx, &lanes.sy, &lanes.sz, &lanes.w,
-        ];
-        assert!(
-            lengths.iter().all(|v| v.len() == len) && lambda.iter().all(|l| l.len() == len),
-            "lanes of one length"
-        );
-        let mut lambda = lambda.iter_mut().map(|l| Disjoint::new(&mut l[..]));
+    fn new(lanes: &'a mut Lanes, lambda: &'a mut Staggered) -> SharedLanes<'a> {
+        let [x, y, z, sx, sy, sz, w] = lanes.arrays_mut();
+        let len = x.len();
+        let mut lambda = lambda.all_mut().map(|l| {
+            assert_eq!(l.len(), len, "lanes of one length");
+            Disjoint::new(l)
+        });
         SharedLanes {
-            x: Disjoint::new(&mut lanes.x),
-            y: Disjoint::new(&mut lanes.y),
-            z: Disjoint::new(&mut lanes.z),
-            sx: &lanes.sx,
-            sy: &lanes.sy,
-            sz: &lanes.sz,
-            w: &lanes.w,
+            x: Disjoint::new(x),
+            y: Disjoint::new(y),
+            z: Disjoint::new(z),
+            sx,
+            sy,
+            sz,
+            w,
             lambda: std::array::from_fn(|_| lambda.next().expect("six passes")),
         }
     }
@@ -443,7 +436,7 @@ fn sweep_with(
 ) {
     let shared = SharedLanes::new(lanes, &mut plan.lambda);
     let k: [Compliance; 6] = std::array::from_fn(|p| compliance[plan.passes[p].kind.index()]);
-    let rest: [&[f32]; 6] = std::array::from_fn(|p| &plan.passes[p].rest[..]);
+    let rest: [&[f32]; 6] = std::array::from_fn(|p| plan.rest.get(p));
     for p in 0..6 {
         for (phase, work) in plan.phases.iter().zip(&plan.work) {
             team_for(team, work[p]).sum_over(phase, |region| {
@@ -509,7 +502,7 @@ pub(crate) fn limit_stretch(
     }
     let shared = SharedLanes::new(lanes, &mut plan.lambda);
     let stretch: [bool; 6] = std::array::from_fn(|p| plan.passes[p].kind == SpringKind::Stretch);
-    let rest: [&[f32]; 6] = std::array::from_fn(|p| &plan.passes[p].rest[..]);
+    let rest: [&[f32]; 6] = std::array::from_fn(|p| plan.rest.get(p));
     let mut shortened = 0;
     for _ in 0..super::strain_limit::PASSES {
         let mut over = 0;
@@ -677,7 +670,7 @@ mod tests {
     fn setup() -> (GridPlan, Lanes) {
         let cloth = ClothBuilder::new(13, 9).build().unwrap();
         let plan = GridPlan::new(cloth.grid().unwrap(), cloth.springs()).unwrap();
-        let mut lanes = Lanes::default();
+        let mut lanes = Columns::default();
         for (i, p) in cloth.positions().iter().enumerate() {
             let j = (i as f32 * 0.37).sin() * 0.01;
             lanes.x.push(p.x + j);
@@ -692,24 +685,41 @@ mod tests {
         (plan, lanes)
     }
 
+    /// Lanes' arrays filled in particle order.
+    #[derive(Default)]
+    struct Columns {
+        x: Vec<f32>,
+        y: Vec<f32>,
+        z: Vec<f32>,
+        sx: Vec<f32>,
+        sy: Vec<f32>,
+        sz: Vec<f32>,
+        w: Vec<f32>,
+    }
+
     /// `lanes` filled in particle order, moved to the plan's lane order.
-    fn in_lane_order(plan: &GridPlan, lanes: Lanes) -> Lanes {
-        let order = |v: Vec<f32>| {
-            let mut out = vec![0.0; v.len()];
-            for (i, x) in v.into_iter().enumerate() {
-                out[plan.lane(i)] = x;
+    fn in_lane_order(plan: &GridPlan, lanes: Columns) -> Lanes {
+        let mut out = Lanes::default();
+        out.resize(lanes.x.len());
+        let from = [
+            lanes.x, lanes.y, lanes.z, lanes.sx, lanes.sy, lanes.sz, lanes.w,
+        ];
+        for (to, from) in out.arrays_mut().into_iter().zip(from) {
+            for (i, v) in from.into_iter().enumerate() {
+                to[plan.lane(i)] = v;
             }
-            out
-        };
-        Lanes {
-            x: order(lanes.x),
-            y: order(lanes.y),
-            z: order(lanes.z),
-            sx: order(lanes.sx),
-            sy: order(lanes.sy),
-            sz: order(lanes.sz),
-            w: order(lanes.w),
         }
+        out
+    }
+
+    /// The positions' bits, x then y then z.
+    fn bits(lanes: &mut Lanes) -> Vec<u32> {
+        let [x, y, z, ..] = lanes.arrays_mut();
+        x.iter()
+            .chain(&*y)
+            .chain(&*z)
+            .map(|v| v.to_bits())
+            .collect()
     }
 
     #[test]
@@ -734,17 +744,10 @@ mod tests {
             sweep(&mut plan_a, &mut a, &k, Team::ALONE);
             sweep_with(&mut plan_b, &mut b, &k, Team::ALONE, false);
         }
-        let bits = |l: &Lanes| -> Vec<u32> {
-            l.x.iter()
-                .chain(&l.y)
-                .chain(&l.z)
-                .map(|v| v.to_bits())
-                .collect()
-        };
-        assert_eq!(bits(&a), bits(&b));
+        assert_eq!(bits(&mut a), bits(&mut b));
         // And the sweep did move them: the check can fail.
-        let (_, fresh) = setup();
-        assert_ne!(bits(&a), bits(&fresh));
+        let (_, mut fresh) = setup();
+        assert_ne!(bits(&mut a), bits(&mut fresh));
     }
 
     #[test]
@@ -792,7 +795,7 @@ mod tests {
                                 assert_eq!(b / cols, a / cols + pass.dr, "{cols}x{rows}");
                                 assert_eq!((b % cols) as isize, (a % cols) as isize + pass.dc);
                                 assert!(
-                                    pass.rest[la] > 0.0,
+                                    plan.rest.get(p)[la] > 0.0,
                                     "{cols}x{rows}: a run over a missing spring"
                                 );
                                 assert!(
@@ -821,7 +824,7 @@ mod tests {
         let plan = GridPlan::new(cloth.grid().unwrap(), cloth.springs()).unwrap();
         assert_eq!(plan.phases[1].len(), 3);
         let lanes = || {
-            let mut lanes = Lanes::default();
+            let mut lanes = Columns::default();
             for (i, p) in cloth.positions().iter().enumerate() {
                 let j = (i as f32 * 0.37).sin() * 0.01;
                 lanes.x.push(p.x * 1.08 + j);
@@ -850,14 +853,7 @@ mod tests {
                     limit_stretch(&mut plan, &mut lanes, 1.02, team)
                 })
             });
-            let bits: Vec<u32> = lanes
-                .x
-                .iter()
-                .chain(&lanes.y)
-                .chain(&lanes.z)
-                .map(|v| v.to_bits())
-                .collect();
-            (bits, limited)
+            (bits(&mut lanes), limited)
         };
         let one = run(1, false);
         assert!(one.1 > 0, "the limit had springs to shorten");
@@ -872,7 +868,7 @@ mod tests {
         for (cols, rows) in [(2, 2), (3, 2), (2, 5), (4, 3)] {
             let cloth = ClothBuilder::new(cols, rows).build().unwrap();
             let mut plan = GridPlan::new(cloth.grid().unwrap(), cloth.springs()).unwrap();
-            let mut lanes = Lanes::default();
+            let mut lanes = Columns::default();
             for p in cloth.positions() {
                 lanes.x.push(p.x * 1.1);
                 lanes.y.push(p.y);
@@ -891,7 +887,7 @@ mod tests {
             // Stretched by 10%, the sweep pulls every row back inwards.
             let last = plan.lane(cols - 1);
             assert!(
-                lanes.x[last] < cloth.positions()[cols - 1].x * 1.1,
+                lanes.arrays_mut()[0][last] < cloth.positions()[cols - 1].x * 1.1,
                 "{cols}x{rows}"
             );
         }

@@ -20,6 +20,7 @@ mod schedule;
 mod settings;
 mod spring_space;
 mod stability;
+mod staggered;
 mod state;
 mod strain_limit;
 mod substep;

@@ -145,7 +145,7 @@ impl ClothSolver {
                     &cloth.material,
                     Masses { mass, inv_mass },
                     &cloth.params,
-                    self.settings.parallel,
+                    team,
                 ),
                 settings: &self.settings,
                 obstacles,
