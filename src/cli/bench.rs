@@ -192,12 +192,27 @@ pub fn bench_rapier_drape(n: usize, warmup: u32, frames: u32) -> BenchRow {
 /// Wall time per frame against particle count, one curve per engine and
 /// integrator, both axes in powers of ten: the picture in BENCHMARKS.md.
 pub fn plot(rows: &[BenchRow], width: u32, height: u32) -> Result<image::RgbImage, String> {
+    let panel = super::plot::Panel {
+        title: "drape: wall time per frame (1/60 s); one thread unless the label says".into(),
+        y_label: "log10 ms per frame".into(),
+        curves: curves(rows),
+    };
+    super::plot::draw(&[panel], "log10 particles", width, height)
+}
+
+/// The rows as curves of log10 ms per frame against log10 particles.
+fn curves(rows: &[BenchRow]) -> Vec<super::plot::Curve> {
     let mut curves: Vec<super::plot::Curve> = Vec::new();
+    // An engine and integrator keeps its colour; more threads draw it darker.
+    let mut hues: Vec<String> = Vec::new();
     for row in rows {
-        let label = if row.engine == "cloth3d" {
-            format!("cloth3d {}", row.integrator)
-        } else {
-            row.engine.clone()
+        let base = match row.engine.as_str() {
+            "cloth3d" => format!("cloth3d {}", row.integrator),
+            _ => row.engine.clone(),
+        };
+        let label = match row.threads {
+            1 => base.clone(),
+            t => format!("{base}, {t} threads"),
         };
         let point = (
             ((row.n * row.n) as f64).log10(),
@@ -206,21 +221,21 @@ pub fn plot(rows: &[BenchRow], width: u32, height: u32) -> Result<image::RgbImag
         match curves.iter_mut().find(|c| c.label == label) {
             Some(c) => c.points.push(point),
             None => {
-                let color = super::plot::COLORS[curves.len() % super::plot::COLORS.len()];
+                let hue = hues.iter().position(|h| *h == base).unwrap_or_else(|| {
+                    hues.push(base);
+                    hues.len() - 1
+                });
+                let color = super::plot::COLORS[hue % super::plot::COLORS.len()];
+                let shade = 1.0 / row.threads.max(1) as f32;
                 curves.push(super::plot::Curve {
                     label,
                     points: vec![point],
-                    color,
+                    color: color.map(|c| (f32::from(c) * (0.4 + 0.6 * shade)) as u8),
                 });
             }
         }
     }
-    let panel = super::plot::Panel {
-        title: "drape: wall time per frame (1/60 s), one thread".into(),
-        y_label: "log10 ms per frame".into(),
-        curves,
-    };
-    super::plot::draw(&[panel], "log10 particles", width, height)
+    curves
 }
 
 /// How the rows compare with issue 7's targets, one line each, saying by how
@@ -350,6 +365,23 @@ mod tests {
             max_penetration: 0.0,
             speedup_vs_rapier: Some(6.0),
         }
+    }
+
+    #[test]
+    fn each_thread_count_is_its_own_curve() {
+        let two = BenchRow {
+            threads: 2,
+            ..row("xpbd", 8.0, None)
+        };
+        let c = curves(&[row("xpbd", 16.0, None), two, row("xpbd", 30.0, None)]);
+        let labels: Vec<&str> = c.iter().map(|c| c.label.as_str()).collect();
+        assert_eq!(labels, ["cloth3d xpbd", "cloth3d xpbd, 2 threads"]);
+        assert_eq!(c[0].points.len(), 2);
+        assert_eq!(c[1].points.len(), 1);
+        // The same hue, darker.
+        let [r0, g0, b0] = c[0].color.map(u32::from);
+        let [r1, g1, b1] = c[1].color.map(u32::from);
+        assert!(r1 < r0 && g1 < g0 && b1 < b0, "{:?} {:?}", c[0].color, c[1].color);
     }
 
     #[test]
