@@ -324,10 +324,22 @@ fn bench_json_has_every_figure_and_plots_them() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `cloth3d bench ARGS` over one warm-up and one timed frame without
+/// rapier's cloth: its JSON rows.
+fn quick_bench(args: &[&str]) -> Vec<serde_json::Value> {
+    let quick = ["--warmup", "1", "--frames", "1", "--no-rapier", "--json"];
+    let all: Vec<&str> = ["bench"]
+        .iter()
+        .chain(args)
+        .chain(&quick)
+        .copied()
+        .collect();
+    json_lines(&cloth3d_ok(&all))
+}
+
 #[test]
 fn bench_takes_the_substeps_and_sweeps_it_is_given() {
-    let stdout = cloth3d_ok(&[
-        "bench",
+    let rows = quick_bench(&[
         "--n",
         "8",
         "--integrator",
@@ -336,16 +348,9 @@ fn bench_takes_the_substeps_and_sweeps_it_is_given() {
         "7",
         "--xpbd-iterations",
         "3",
-        "--warmup",
-        "1",
-        "--frames",
-        "1",
-        "--no-rapier",
-        "--json",
     ]);
-    let rows = json_lines(&stdout);
-    assert_eq!(rows.len(), 1, "{stdout}");
-    assert_eq!(rows[0]["substeps"], 7, "{stdout}");
+    assert_eq!(rows.len(), 1, "{rows:?}");
+    assert_eq!(rows[0]["substeps"], 7, "{rows:?}");
     let bad = cloth3d(&["bench", "--xpbd-iterations", "0", "--no-rapier"]);
     let stderr = String::from_utf8_lossy(&bad.stderr);
     assert_eq!(bad.status.code(), Some(2), "{stderr}");
@@ -354,8 +359,7 @@ fn bench_takes_the_substeps_and_sweeps_it_is_given() {
 
 #[test]
 fn bench_runs_each_row_on_each_thread_count() {
-    let args = [
-        "bench",
+    let rows = quick_bench(&[
         "--n",
         "48",
         "--integrator",
@@ -364,14 +368,7 @@ fn bench_runs_each_row_on_each_thread_count() {
         "1",
         "--threads",
         "2",
-        "--warmup",
-        "1",
-        "--frames",
-        "1",
-        "--no-rapier",
-        "--json",
-    ];
-    let rows = json_lines(&cloth3d_ok(&args));
+    ]);
     let threads: Vec<u64> = rows
         .iter()
         .map(|r| r["threads"].as_u64().unwrap())

@@ -381,7 +381,12 @@ mod tests {
         // The same hue, darker.
         let [r0, g0, b0] = c[0].color.map(u32::from);
         let [r1, g1, b1] = c[1].color.map(u32::from);
-        assert!(r1 < r0 && g1 < g0 && b1 < b0, "{:?} {:?}", c[0].color, c[1].color);
+        assert!(
+            r1 < r0 && g1 < g0 && b1 < b0,
+            "{:?} {:?}",
+            c[0].color,
+            c[1].color
+        );
     }
 
     #[test]

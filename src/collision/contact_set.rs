@@ -160,11 +160,9 @@ impl ContactSet {
 
     /// Particle `i` will reach an obstacle within the substep (or touches it): all of the contact.
     pub(super) fn detect(&mut self, i: usize, c: &ParticleContact) {
-        self.touching[i] = true;
-        self.obstacle[i] = c.obstacle;
-        self.immovable[i] = c.immovable;
-        self.normal[i] = c.normal;
-        self.surface_velocity[i] = c.surface_velocity;
+        let shared = self.shared();
+        // SAFETY: `shared` borrows the whole set, and this is its one range.
+        unsafe { shared.range(i..i + 1) }.touch(0, c);
         self.gap[i] = c.gap;
         self.friction[i] = c.friction;
     }

@@ -443,47 +443,51 @@ fn sweep_with(
                 // SAFETY: the regions of a phase touch disjoint lanes (the plan
                 // is built so, and tested), so the views alive at once are
                 // disjoint; `lanes` and the passes are borrowed for the sweep.
-                let (mut view, mut lambda) = unsafe { shared.view(region.lanes.clone()) };
+                let (mut view, lambdas) = unsafe { shared.view(region.lanes.clone()) };
+                let Some(lambda) = lambdas.into_iter().nth(p) else {
+                    return 0;
+                };
+                let job = RegionSweep {
+                    region,
+                    p,
+                    rest: &rest,
+                    k: &k,
+                };
                 #[cfg(target_arch = "x86_64")]
                 if simd {
                     // SAFETY: `simd` only when the CPU has AVX2.
-                    unsafe { sweep_region_avx2(region, p, &rest, &k, &mut view, &mut lambda) };
+                    unsafe { sweep_region_avx2(&job, &mut view, lambda) };
                     return 0;
                 }
                 let _ = simd;
-                sweep_region(region, p, &rest, &k, &mut view, &mut lambda);
+                sweep_region(&job, &mut view, lambda);
                 0
             });
         }
     }
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn sweep_region_avx2(
-    region: &Region,
+/// One family's runs in one region: the family, and per family the rest
+/// lengths (whole arrays) and compliance terms.
+struct RegionSweep<'a> {
+    region: &'a Region,
     p: usize,
-    rest: &[&[f32]; 6],
-    k: &[Compliance; 6],
-    view: &mut View,
-    lambda: &mut [&mut [f32]; 6],
-) {
-    sweep_region(region, p, rest, k, view, lambda);
+    rest: &'a [&'a [f32]; 6],
+    k: &'a [Compliance; 6],
 }
 
-/// One region's runs, pass by pass.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn sweep_region_avx2(job: &RegionSweep, view: &mut View, lambda: &mut [f32]) {
+    sweep_region(job, view, lambda);
+}
+
+/// The family's runs in the region, with its multipliers there.
 #[inline(always)]
-fn sweep_region(
-    region: &Region,
-    p: usize,
-    rest: &[&[f32]; 6],
-    k: &[Compliance; 6],
-    view: &mut View,
-    lambda: &mut [&mut [f32]; 6],
-) {
-    let rest = &rest[p][region.lanes.clone()];
-    for &seg in &region.runs[p] {
-        run(seg, rest, lambda[p], view, k[p]);
+fn sweep_region(job: &RegionSweep, view: &mut View, lambda: &mut [f32]) {
+    let rest = &job.rest[job.p][job.region.lanes.clone()];
+    for &seg in &job.region.runs[job.p] {
+        run(seg, rest, lambda, view, job.k[job.p]);
     }
 }
 
