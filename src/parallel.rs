@@ -10,8 +10,9 @@
 //! idle workers fall asleep within tens of microseconds; waking them took
 //! longer than the loops (measured: 8 items of 5 µs after 50 µs of serial
 //! work took 40 µs on 2 threads, the time of one). For one step the team's
-//! helpers wait for work spinning, as Box2D v3's workers wait between the
-//! stages of its solver, and leave when the step ends.
+//! helpers wait for work spinning (a moment, then yielding the CPU), as
+//! Box2D v3's workers wait between the stages of its solver, and leave when
+//! the step ends.
 
 use std::marker::PhantomData;
 use std::ops::Range;

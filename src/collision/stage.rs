@@ -218,8 +218,8 @@ impl CollisionStage {
     }
 
     /// Resolves every contact after a substep, with the obstacles where
-    /// [`CollisionStage::advance`] put them; with `edges`, stretch and shear
-    /// springs too (`options.edges`). The solver's friction policy says whether Coulomb
+    /// [`CollisionStage::advance`] put them; with `options.edges`, stretch
+    /// and shear springs too. The solver's friction policy says whether Coulomb
     /// friction acts on the touching particles here or was already decided
     /// inside its solve (then they are only put back on the surface).
     /// The particles are resolved block by block, on the team's threads,
@@ -301,6 +301,7 @@ impl CollisionStage {
         }
         contacts
     }
+
     /// The edge pass: stretch and shear springs whose ends lie near an
     /// obstacle are kept out of it, then every particle it moved is pushed
     /// back out of every obstacle.
