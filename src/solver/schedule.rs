@@ -2,12 +2,16 @@
 //!
 //! ```text
 //! validate → substeps k, h = dt / k → back up → obstacle bounds over the step
+//!     → candidates per particle → a team of threads for the substeps
 //! per substep:  obstacle motion → contact detection (solvers that solve
 //!               contacts) → integrate → stretch limit (solvers that do not
 //!               hold it in their own substep) → resolve contacts (with the
 //!               friction policy the integrator handed back)
 //! divergence check → roll back and report, or commit the time
 //! ```
+//!
+//! The stages' loops over particles, bands and springs run on the team
+//! (`parallel.rs`), with the bits of one thread.
 
 use super::cloth_solver::ClothSolver;
 use super::integrate::integrate;
