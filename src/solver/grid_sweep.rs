@@ -289,9 +289,9 @@ impl GridPlan {
             return None;
         }
         let phases = regions(cols, rows, &families.map(|(_, dr, dc, p)| (dr, dc, p)));
-        let work = phases.clone().map(|phase| {
+        let work = std::array::from_fn(|phase| {
             std::array::from_fn(|p| {
-                let runs = phase.iter().flat_map(|region| &region.runs[p]);
+                let runs = phases[phase].iter().flat_map(|region| &region.runs[p]);
                 runs.map(|seg| seg.len as usize).sum()
             })
         });
@@ -383,26 +383,32 @@ impl<'a> SharedLanes<'a> {
         }
     }
 
-    /// The lanes `range` and the multipliers there.
+    /// The lanes `range`.
     ///
     /// # Safety
     /// No other view of a range overlapping `range` may be in use meanwhile.
-    unsafe fn view(self, range: std::ops::Range<usize>) -> (View<'a>, [&'a mut [f32]; 6]) {
+    unsafe fn view(self, range: std::ops::Range<usize>) -> View<'a> {
         // SAFETY: exclusive by the caller's promise.
         unsafe {
-            (
-                View {
-                    x: self.x.range(range.clone()),
-                    y: self.y.range(range.clone()),
-                    z: self.z.range(range.clone()),
-                    sx: &self.sx[range.clone()],
-                    sy: &self.sy[range.clone()],
-                    sz: &self.sz[range.clone()],
-                    w: &self.w[range.clone()],
-                },
-                self.lambda.map(|l| l.range(range.clone())),
-            )
+            View {
+                x: self.x.range(range.clone()),
+                y: self.y.range(range.clone()),
+                z: self.z.range(range.clone()),
+                sx: &self.sx[range.clone()],
+                sy: &self.sy[range.clone()],
+                sz: &self.sz[range.clone()],
+                w: &self.w[range],
+            }
         }
+    }
+
+    /// Pass `p`'s multipliers at the lanes `range`.
+    ///
+    /// # Safety
+    /// As for [`SharedLanes::view`].
+    unsafe fn lambda(self, p: usize, range: std::ops::Range<usize>) -> &'a mut [f32] {
+        // SAFETY: exclusive by the caller's promise.
+        unsafe { self.lambda[p].range(range) }
     }
 }
 
@@ -443,9 +449,11 @@ fn sweep_with(
                 // SAFETY: the regions of a phase touch disjoint lanes (the plan
                 // is built so, and tested), so the views alive at once are
                 // disjoint; `lanes` and the passes are borrowed for the sweep.
-                let (mut view, lambdas) = unsafe { shared.view(region.lanes.clone()) };
-                let Some(lambda) = lambdas.into_iter().nth(p) else {
-                    return 0;
+                let (mut view, lambda) = unsafe {
+                    (
+                        shared.view(region.lanes.clone()),
+                        shared.lambda(p, region.lanes.clone()),
+                    )
                 };
                 let job = RegionSweep {
                     region,
@@ -514,7 +522,7 @@ pub(crate) fn limit_stretch(
             for (phase, work) in plan.phases.iter().zip(&plan.work) {
                 over += team_for(team, work[p]).sum_over(phase, |region| {
                     // SAFETY: as in `sweep_with`: disjoint regions, borrowed buffers.
-                    let (mut view, _) = unsafe { shared.view(region.lanes.clone()) };
+                    let mut view = unsafe { shared.view(region.lanes.clone()) };
                     let rest = &rest[p][region.lanes.clone()];
                     let mut over = 0;
                     for seg in &region.runs[p] {
