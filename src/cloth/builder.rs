@@ -130,9 +130,17 @@ impl ClothBuilder {
         self
     }
 
-    /// The physical parameters: gravity, air drag, wind, thickness.
+    /// The physical parameters: gravity, air drag, wind, thickness,
+    /// self-collision.
     pub fn params(mut self, params: PhysicsParams) -> Self {
         self.params = params;
+        self
+    }
+
+    /// Keep the cloth from passing through itself (its particles stay the
+    /// thickness away from its own triangles); off by default.
+    pub fn self_collision(mut self, on: bool) -> Self {
+        self.params.self_collision = on;
         self
     }
 

@@ -1,5 +1,5 @@
-//! The physical parameters of a cloth's world: gravity, air drag, wind and
-//! collision thickness. How the equations are solved is the solver's
+//! The physical parameters of a cloth's world: gravity, air drag, wind,
+//! collision thickness and self-collision. How the equations are solved is the solver's
 //! (`crate::solver::SolverSettings`), not the cloth's.
 
 use serde::{Deserialize, Serialize};
@@ -50,8 +50,20 @@ pub struct PhysicsParams {
     pub air_drag: f32,
     /// Wind on the triangles.
     pub wind: Wind,
-    /// Collision thickness: particles are kept this far outside obstacles, in metres.
+    /// Collision thickness: particles are kept this far outside obstacles
+    /// (and, with self-collision, from the cloth's own triangles), in metres.
     pub thickness: f32,
+    /// Keep the cloth from passing through itself (off by default: it costs
+    /// a look over the triangles every few substeps).
+    #[serde(default)]
+    pub self_collision: bool,
+    /// Coulomb friction between touching layers of the cloth.
+    #[serde(default = "default_self_friction")]
+    pub self_friction: f32,
+}
+
+fn default_self_friction() -> f32 {
+    0.3
 }
 
 impl Default for PhysicsParams {
@@ -61,6 +73,8 @@ impl Default for PhysicsParams {
             air_drag: 0.02,
             wind: Wind::NONE,
             thickness: 0.01,
+            self_collision: false,
+            self_friction: default_self_friction(),
         }
     }
 }
@@ -73,6 +87,7 @@ impl PhysicsParams {
         finite_vec("wind direction", self.wind.direction)?;
         non_negative("wind strength", self.wind.strength)?;
         non_negative("thickness", self.thickness)?;
+        non_negative("self friction", self.self_friction)?;
         Ok(())
     }
 }

@@ -7,13 +7,20 @@
 //! tangential part gets Coulomb friction (unless the solver decided friction
 //! itself: [`FrictionPolicy`]). Stretch and shear springs are then sampled so
 //! the cloth cannot cut through edges and corners.
+//!
+//! Self-collision keeps the cloth's own layers a thickness apart
+//! ([`SelfContacts`]); [`self_intersections`] counts where they are not.
 
 mod contact;
 mod contact_set;
 mod edges;
+mod neighbours;
 mod obstacle;
 mod particle_pass;
 mod response;
+mod self_contacts;
+mod self_intersections;
+mod spatial_hash;
 mod stage;
 mod tracks;
 
@@ -21,5 +28,8 @@ pub use contact::{contact, penetration_depth, Contact};
 pub use contact_set::{ContactSet, ParticleContact};
 pub use obstacle::{DynamicBody, Obstacle, ObstacleImpulse};
 pub use response::{respond, FrictionPolicy, Response};
+pub(crate) use self_contacts::SelfContactParams;
+pub use self_contacts::SelfContacts;
+pub use self_intersections::self_intersections;
 pub use stage::CollisionStage;
 pub(crate) use stage::ResolveOptions;

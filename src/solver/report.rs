@@ -20,6 +20,10 @@ pub struct StepReport {
     pub iterations: u32,
     /// Particle–obstacle contacts resolved, summed over substeps.
     pub contacts: u32,
+    /// Particle–triangle contacts within the cloth resolved, summed over
+    /// substeps (0 without self-collision).
+    #[serde(default)]
+    pub self_contacts: u32,
 }
 
 /// What a solver has done since it was made.

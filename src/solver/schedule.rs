@@ -5,8 +5,10 @@
 //!     → candidates per particle → a team of threads for the substeps
 //! per substep:  obstacle motion → contact detection (solvers that solve
 //!               contacts) → integrate → stretch limit (solvers that do not
-//!               hold it in their own substep) → resolve contacts (with the
-//!               friction policy the integrator handed back)
+//!               hold it in their own substep) → self-collision (cloths
+//!               that have it: a fresh look every few substeps, a pass
+//!               every substep) → resolve contacts (with the friction
+//!               policy the integrator handed back)
 //! divergence check → roll back and report, or commit the time
 //! ```
 //!
@@ -20,7 +22,7 @@ use super::stability::stable_substeps;
 use super::strain_limit::limit_stretch;
 use super::substep::Substep;
 use crate::cloth::{Cloth, Particles, SpringKind};
-use crate::collision::{Obstacle, ResolveOptions};
+use crate::collision::{Obstacle, ResolveOptions, SelfContactParams};
 use crate::context::StepContext;
 use crate::error::{positive, ClothError};
 use crate::forces::{ForceModel, Masses};
@@ -75,6 +77,14 @@ impl ClothSolver {
             candidate_margin(cloth, dt),
             &cloth.topology.springs,
         );
+        if cloth.params.self_collision {
+            ws.self_contacts.begin_step(
+                &cloth.particles,
+                &cloth.topology,
+                (dt / k as f32, k),
+                cloth.params.thickness,
+            );
+        }
 
         // Below a few thousand particles the loops are too short to share.
         let threads = self.settings.parallel && n >= TEAM_MIN_PARTICLES;
@@ -179,6 +189,23 @@ impl ClothSolver {
                     &mut p.x,
                     Some(&mut p.v),
                     cloth.material.stretch_limit_factor(),
+                );
+            }
+            // Self-collision: before the obstacles, so that they win where
+            // the two disagree (a layer pressed onto a ball stays outside it).
+            if cloth.params.self_collision {
+                let (selfc, topology) = (&mut ws.self_contacts, &*cloth.topology);
+                if selfc.due(substep) {
+                    selfc.find(&cloth.particles.x, topology, ctx.thickness, team);
+                }
+                report.self_contacts += selfc.resolve(
+                    &mut cloth.particles,
+                    topology,
+                    &SelfContactParams {
+                        thickness: ctx.thickness,
+                        friction: cloth.params.self_friction,
+                        h,
+                    },
                 );
             }
             // Resolve contacts, by the friction policy the integrator handed back.

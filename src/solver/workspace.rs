@@ -6,7 +6,7 @@
 use super::fast_mass_spring::FastMassSpringState;
 use super::implicit_euler::ImplicitState;
 use super::xpbd::XpbdScratch;
-use crate::collision::CollisionStage;
+use crate::collision::{CollisionStage, SelfContacts};
 use crate::math::Vector;
 
 /// Buffers of the explicit integrators (accelerations and Runge–Kutta stages).
@@ -34,6 +34,8 @@ pub(crate) struct Workspace {
     pub xpbd: XpbdScratch,
     /// The collision stage: obstacle motion, contacts, impulses.
     pub collision: CollisionStage,
+    /// The self-collision stage: pairs of a particle and a triangle of the same cloth.
+    pub self_contacts: SelfContacts,
 }
 
 impl Workspace {

@@ -1,0 +1,216 @@
+//! Which particles of a cloth are neighbours in its rest mesh, so that
+//! self-collision leaves them alone: a particle and a triangle are
+//! neighbours when the particle is a corner of the triangle or is joined
+//! by a spring (stretch, shear or bend) to one of its corners. On a grid
+//! that spares every particle within two cells; the rest of the cloth can
+//! only come near through a fold. Also the triangles' edges, once each.
+
+use crate::cloth::Topology;
+
+/// Flat adjacency lists of a topology (compressed rows, sorted).
+#[derive(Debug, Default, Clone)]
+pub(crate) struct MeshNeighbours {
+    /// Per particle: where its spring partners start in `joined` (one more
+    /// entry than particles).
+    joined_start: Vec<u32>,
+    /// Spring partners, ascending per particle.
+    joined: Vec<u32>,
+    /// Per particle `i`: where the far ends `j > i` of its triangle edges
+    /// start in `edges` (one more entry than particles).
+    edge_start: Vec<u32>,
+    /// Far ends of triangle edges, ascending per particle.
+    edges: Vec<u32>,
+    /// Per triangle: bit k set when the edge facing its corner k is on the
+    /// cloth's border (no other triangle shares it).
+    border: Vec<u8>,
+    /// For a grid cloth: columns, and the rest spacing along a row and
+    /// along a column (m), from which rest distances follow.
+    grid: Option<(u32, f32, f32)>,
+    /// What the lists were made from: the topology's address, particle,
+    /// spring and triangle counts.
+    made_for: Option<(usize, usize, usize, usize)>,
+}
+
+impl MeshNeighbours {
+    /// Makes the lists for `topology` of `n` particles, unless they were
+    /// made for it already.
+    pub fn update(&mut self, topology: &Topology, n: usize) {
+        let key = (
+            topology as *const Topology as usize,
+            n,
+            topology.springs.len(),
+            topology.triangles.len(),
+        );
+        if self.made_for == Some(key) {
+            return;
+        }
+        let springs = &topology.springs;
+        let pairs = springs
+            .a
+            .iter()
+            .zip(&springs.b)
+            .flat_map(|(&a, &b)| [(a, b), (b, a)]);
+        (self.joined_start, self.joined) = compressed(n, pairs);
+        let edges = topology.triangles.iter().flat_map(|t| {
+            [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])].map(|(a, b)| (a.min(b), a.max(b)))
+        });
+        (self.edge_start, self.edges) = compressed(n, edges);
+        let mut all: Vec<(u32, u32)> = topology
+            .triangles
+            .iter()
+            .flat_map(|t| {
+                [(t[1], t[2]), (t[2], t[0]), (t[0], t[1])].map(|(a, b)| (a.min(b), a.max(b)))
+            })
+            .collect();
+        all.sort_unstable();
+        let shared = |e: (u32, u32)| {
+            let first = all.partition_point(|&x| x < e);
+            all.get(first + 1) == Some(&e)
+        };
+        self.border = topology
+            .triangles
+            .iter()
+            .map(|t| {
+                let facing = [(t[1], t[2]), (t[2], t[0]), (t[0], t[1])];
+                (0..3)
+                    .filter(|&k| {
+                        !shared((facing[k].0.min(facing[k].1), facing[k].0.max(facing[k].1)))
+                    })
+                    .fold(0u8, |m, k| m | 1 << k)
+            })
+            .collect();
+        self.grid = topology.grid.and_then(|g| {
+            let rest = |a: usize, b: usize| {
+                (0..springs.len())
+                    .find(|&s| (springs.a[s], springs.b[s]) == (a as u32, b as u32))
+                    .map(|s| springs.rest[s])
+            };
+            Some((g.cols as u32, rest(0, 1)?, rest(0, g.cols)?))
+        });
+        self.made_for = Some(key);
+    }
+
+    /// True when particle `p` and the triangle `tri` are neighbours.
+    pub fn near(&self, p: u32, tri: [u32; 3]) -> bool {
+        if tri.contains(&p) {
+            return true;
+        }
+        let joined = self.joined_to(p);
+        tri.iter().any(|c| joined.binary_search(c).is_ok())
+    }
+
+    /// Which edges of triangle `t` lie on the cloth's border: bit k for the
+    /// edge facing corner k.
+    pub fn border(&self, t: usize) -> u8 {
+        self.border.get(t).copied().unwrap_or(0)
+    }
+
+    /// The particles of the same smooth sheet as triangle `tri`: on a
+    /// grid cloth, those closer than `radius` metres to one of its corners
+    /// in the rest shape (none off a grid). Such a particle can only come
+    /// within the thickness of the triangle through a fold tighter than
+    /// about `radius / π`, which the bending springs resist.
+    pub fn sheet(&self, tri: [u32; 3], radius: f32) -> Sheet {
+        match self.grid {
+            Some((cols, dx, dy)) => Sheet {
+                cols,
+                corners: tri.map(|c| [c / cols, c % cols]),
+                radius: [1.0 / dx, 1.0 / dy].map(|s| if s.is_finite() { s * radius } else { 0.0 }),
+            },
+            None => Sheet {
+                cols: 1,
+                corners: [[0; 2]; 3],
+                radius: [0.0; 2],
+            },
+        }
+    }
+
+    /// The particles joined to `p` by a spring, ascending.
+    pub fn joined_to(&self, p: u32) -> &[u32] {
+        let p = p as usize;
+        match (self.joined_start.get(p), self.joined_start.get(p + 1)) {
+            (Some(&s), Some(&e)) => &self.joined[s as usize..e as usize],
+            _ => &[],
+        }
+    }
+
+    /// The far ends `j > p` of the triangle edges at `p`, ascending.
+    pub fn edges_from(&self, p: u32) -> &[u32] {
+        let p = p as usize;
+        match (self.edge_start.get(p), self.edge_start.get(p + 1)) {
+            (Some(&s), Some(&e)) => &self.edges[s as usize..e as usize],
+            _ => &[],
+        }
+    }
+}
+
+/// Compressed rows of the pairs `(row, column)` over `n` rows: sorted and
+/// without repeats; pairs out of range are dropped.
+fn compressed(n: usize, pairs: impl Iterator<Item = (u32, u32)>) -> (Vec<u32>, Vec<u32>) {
+    let mut list: Vec<(u32, u32)> = pairs
+        .filter(|&(a, b)| (a as usize) < n && (b as usize) < n && a != b)
+        .collect();
+    list.sort_unstable();
+    list.dedup();
+    let mut start = vec![0u32; n + 1];
+    for &(a, _) in &list {
+        start[a as usize + 1] += 1;
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    (start, list.into_iter().map(|(_, b)| b).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloth::ClothBuilder;
+
+    /// On a grid: the corner's partners are its stretch, shear and bend
+    /// springs' far ends; a particle three cells away is no neighbour of a
+    /// corner triangle; the triangle edges are each listed once.
+    #[test]
+    fn grid_neighbours_and_edges() {
+        let cloth = ClothBuilder::new(5, 5).build().unwrap();
+        let mut nb = MeshNeighbours::default();
+        nb.update(cloth.topology(), cloth.particle_count());
+        // Corner (0, 0): right (1), down (5), diagonal (6), two right (2), two down (10).
+        assert_eq!(nb.joined_to(0), &[1, 2, 5, 6, 10]);
+        let tri = cloth.triangles()[0];
+        assert!(nb.near(tri[0], tri));
+        assert!(nb.near(12, [0, 1, 6]), "(2, 2) is (1, 1)'s shear partner");
+        assert!(
+            !nb.near(18, [0, 1, 6]),
+            "(3, 3) is two cells from the triangle's nearest corner"
+        );
+        let edges: usize = (0..25).map(|p| nb.edges_from(p).len()).sum();
+        // 4×4 cells of two triangles: 2·5·4 grid edges and 16 diagonals.
+        assert_eq!(edges, 2 * 5 * 4 + 16);
+    }
+}
+
+/// The particles near a triangle in the rest shape of a grid cloth
+/// ([`MeshNeighbours::sheet`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Sheet {
+    cols: u32,
+    /// Row and column of each corner.
+    corners: [[u32; 2]; 3],
+    /// The radius in columns and in rows.
+    radius: [f32; 2],
+}
+
+impl Sheet {
+    /// True when particle `p` lies within the radius of a corner.
+    #[inline]
+    pub fn holds(&self, p: u32) -> bool {
+        let (r, c) = (p / self.cols, p % self.cols);
+        let [rc, rr] = self.radius;
+        self.corners.iter().any(|&[cr, cc]| {
+            // In units of the radius: (Δcol / radius_cols)² + (Δrow / radius_rows)².
+            let (u, v) = (c.abs_diff(cc) as f32, r.abs_diff(cr) as f32);
+            u * u * rr * rr + v * v * rc * rc < rc * rc * rr * rr
+        })
+    }
+}

@@ -1,0 +1,382 @@
+//! Self-collision: particles kept a thickness away from the triangles of
+//! their own cloth that are not their neighbours in the rest mesh
+//! ([`MeshNeighbours`]), with Coulomb friction between the layers.
+//!
+//! Found ahead, solved every substep (as the obstacles are): a spatial
+//! hash of the particles ([`SpatialHash`]) gives each triangle the
+//! particles within reach of it, `thickness + margin`, where the margin
+//! covers how far particles move relative to each other until the next
+//! look. A look costs a pass over the triangles, so it is taken every few
+//! substeps, as many as keep that relative motion under the thickness
+//! (every substep only for a cloth in violent motion, once a step at rest).
+//! Each pair keeps the side of the triangle the particle was on when found.
+//!
+//! A substep's pass, in pair order (Gauss–Seidel, one thread, the same
+//! bits on any number): for a particle `p` whose projection falls inside
+//! triangle `abc`, or just outside an edge on the cloth's border, where
+//! layers would otherwise slip past each other (barycentrics `u, v, w`,
+//! clamped to the triangle), closer than the thickness `t`
+//! along the side's normal `n`, the constraint `C = (x_p − x_a)·n − t ≥ 0`
+//! moves `p` by `w_p s n` and each corner `i` by `−w_i b_i s n`, with
+//! `s = −C / (w_p + Σ w_i b_i²)` (the inverse masses weigh who moves).
+//! Velocities then lose the part of the relative velocity that closes the
+//! gap, and Coulomb friction (coefficient μ) takes up to μ times the normal
+//! velocity change (that change and the correction over the substep) from
+//! the sliding part. No velocity is added: the pass never pumps energy.
+
+use super::neighbours::MeshNeighbours;
+use super::spatial_hash::SpatialHash;
+use crate::cloth::{Particles, SpringKind, Topology};
+use crate::math::Vector;
+use crate::parallel::{Disjoint, Team};
+
+/// A particle near a triangle of its own cloth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct SelfPair {
+    particle: u32,
+    triangle: u32,
+    /// +1 when the particle lay on the side the triangle's normal points
+    /// to, −1 on the other.
+    side: f32,
+}
+
+/// The self-collision stage of a cloth's solver: its pairs and scratch.
+/// Nothing in it carries over from one step to the next (the first
+/// substep of every step looks afresh).
+#[derive(Debug, Default, Clone)]
+pub struct SelfContacts {
+    /// The particles by cell, at the last look.
+    hash: SpatialHash,
+    /// Per block of triangles: the pairs it found at the last look.
+    blocks: Vec<PairList>,
+    neighbours: MeshNeighbours,
+    pairs: Vec<SelfPair>,
+    /// Substeps between looks in this step.
+    interval: u32,
+    /// How far (m) particles may move relative to each other between looks.
+    margin: f32,
+}
+
+/// Triangles a thread takes at a time in a look for pairs.
+const TRIANGLE_BLOCK: usize = 1024;
+
+/// The pairs a block of triangles found, alone on its cache lines (blocks
+/// on different threads push at once).
+#[derive(Debug, Default, Clone)]
+#[repr(align(128))]
+struct PairList(Vec<SelfPair>);
+
+/// One look for pairs: the positions and how far to look.
+struct Look<'a> {
+    x: &'a [Vector],
+    topology: &'a Topology,
+    thickness: f32,
+    /// Thickness plus margin, in metres.
+    reach: f32,
+    margin: f32,
+}
+
+impl Look<'_> {
+    /// Pushes the pairs of triangle `t` to `out`, in particle order.
+    fn triangle(
+        &self,
+        t: usize,
+        (hash, neighbours): (&SpatialHash, &MeshNeighbours),
+        out: &mut Vec<SelfPair>,
+    ) {
+        let (x, tri) = (self.x, self.topology.triangles[t]);
+        let [a, b, c] = tri.map(|i| x[i as usize]);
+        let (e1, e2) = (b - a, c - a);
+        let normal = e1.cross(e2);
+        let area2 = normal.length();
+        if !is_positive(area2) {
+            return;
+        }
+        let (n, reach) = (normal / area2, self.reach);
+        let rim = rim(self.thickness, (e1, e2));
+        // A particle may slide `margin` towards the triangle before the next
+        // look: accept projections that far outside.
+        let slack = rim_slack((self.margin, rim, neighbours.border(t)), (e1, e2), area2);
+        // Particles of the same smooth sheet as the triangle, up to as far as
+        // a pair can reach from its corners, are left to the springs.
+        let sheet = neighbours.sheet(tri, reach + rim + e1.length().max(e2.length()));
+        let pad = Vector::splat(reach);
+        let (lo, hi) = (a.min(b).min(c) - pad, a.max(b).max(c) + pad);
+        let first = out.len();
+        hash.for_each_in(lo, hi, |p| {
+            let xp = x[p as usize];
+            if !(xp.cmpge(lo).all() && xp.cmple(hi).all()) {
+                return;
+            }
+            let d = (xp - a).dot(n);
+            if d.abs() >= reach || sheet.holds(p) {
+                return;
+            }
+            let [u, v, w] = barycentric(xp - n * d - a, e1, e2);
+            if u < -slack[0] || v < -slack[1] || w < -slack[2] || neighbours.near(p, tri) {
+                return;
+            }
+            out.push(SelfPair {
+                particle: p,
+                triangle: t as u32,
+                side: if d >= 0.0 { 1.0 } else { -1.0 },
+            });
+        });
+        // The hash hands them out by bucket: particle order, for the same
+        // pass whatever the table's size.
+        out[first..].sort_unstable_by_key(|q| q.particle);
+    }
+}
+
+/// What a self-collision pass works with.
+pub(crate) struct SelfContactParams {
+    /// Distance layers keep, in metres.
+    pub thickness: f32,
+    /// Coulomb friction between layers.
+    pub friction: f32,
+    /// The substep, in seconds.
+    pub h: f32,
+}
+
+impl SelfContacts {
+    /// At the start of a step of `substeps` substeps of `h` seconds: how
+    /// often to look, from how fast particles move relative to the mean.
+    pub(crate) fn begin_step(
+        &mut self,
+        p: &Particles,
+        topology: &Topology,
+        (h, substeps): (f32, u32),
+        thickness: f32,
+    ) {
+        self.neighbours.update(topology, p.x.len());
+        let n = p.v.len().max(1) as f32;
+        let mean = p.v.iter().copied().fold(Vector::ZERO, |s, v| s + v) / n;
+        let fastest =
+            p.v.iter()
+                .map(|&v| (v - mean).length_squared())
+                .fold(0.0f32, f32::max)
+                .sqrt();
+        // Two particles may close in on each other at twice the fastest speed.
+        let closing = 2.0 * fastest * h;
+        let target = thickness.max(1.0e-4);
+        self.interval = if closing > 0.0 && closing.is_finite() {
+            ((target / closing).floor() as u32).clamp(1, substeps.max(1))
+        } else {
+            substeps.max(1)
+        };
+        self.margin = if closing.is_finite() {
+            // Twice: the speeds are those of the step's start, and a
+            // swinging skirt gains speed within the step.
+            2.0 * closing * self.interval as f32
+        } else {
+            0.0
+        };
+    }
+
+    /// True when `substep` of this step looks for pairs afresh.
+    pub(crate) fn due(&self, substep: u32) -> bool {
+        substep.is_multiple_of(self.interval.max(1))
+    }
+
+    /// Finds the particles within reach of triangles they are not
+    /// neighbours of, at positions `x`: blocks of triangles on the `team`,
+    /// their pairs then joined in triangle order (the same list on any
+    /// number of threads).
+    pub(crate) fn find(&mut self, x: &[Vector], topology: &Topology, thickness: f32, team: Team) {
+        self.pairs.clear();
+        let triangles = &topology.triangles;
+        if triangles.is_empty() {
+            return;
+        }
+        let look = Look {
+            x,
+            topology,
+            thickness,
+            reach: thickness + self.margin,
+            margin: self.margin,
+        };
+        // Cells about a triangle wide: a triangle's box meets a few.
+        let springs = &topology.springs;
+        let longest = springs
+            .range(SpringKind::Stretch)
+            .chain(springs.range(SpringKind::Shear))
+            .map(|s| springs.rest[s])
+            .fold(0.0f32, f32::max);
+        self.hash.build(x, longest.max(look.reach).max(1.0e-4));
+        let blocks = triangles.len().div_ceil(TRIANGLE_BLOCK);
+        if self.blocks.len() < blocks {
+            self.blocks.resize_with(blocks, PairList::default);
+        }
+        let (hash, neighbours) = (&self.hash, &self.neighbours);
+        let lists = Disjoint::new(&mut self.blocks[..blocks]);
+        team.sum_count(blocks, |k| {
+            // SAFETY: block `k` alone uses list `k`.
+            let list = unsafe { &mut lists.range(k..k + 1)[0].0 };
+            list.clear();
+            let end = ((k + 1) * TRIANGLE_BLOCK).min(triangles.len());
+            for t in k * TRIANGLE_BLOCK..end {
+                look.triangle(t, (hash, neighbours), list);
+            }
+            0
+        });
+        for list in &self.blocks[..blocks] {
+            self.pairs.extend_from_slice(&list.0);
+        }
+    }
+
+    /// One pass over the pairs (module docs); returns how many were
+    /// closer than the thickness.
+    pub(crate) fn resolve(
+        &self,
+        particles: &mut Particles,
+        topology: &Topology,
+        params: &SelfContactParams,
+    ) -> u32 {
+        let Particles { x, v, inv_mass, .. } = particles;
+        let SelfContactParams {
+            thickness,
+            friction,
+            h,
+        } = *params;
+        let mut touching = 0;
+        for pair in &self.pairs {
+            let Some(tri) = topology.triangles.get(pair.triangle as usize) else {
+                continue;
+            };
+            let [ia, ib, ic] = tri.map(|i| i as usize);
+            let ip = pair.particle as usize;
+            let (a, b, c, xp) = (x[ia], x[ib], x[ic], x[ip]);
+            let (e1, e2) = (b - a, c - a);
+            let normal = e1.cross(e2);
+            let len = normal.length();
+            if !is_positive(len) {
+                continue;
+            }
+            let n = normal * (pair.side / len);
+            let d = (xp - a).dot(n);
+            if d >= thickness {
+                continue;
+            }
+            // Deeper than the thickness on the other side: not a crossing
+            // since the last look (that would take tens of m/s), but a pair
+            // the cloth has turned away from (a fold, a swing).
+            if d < -thickness {
+                continue;
+            }
+            let bary = barycentric(xp - n * d - a, e1, e2);
+            let border = self.neighbours.border(pair.triangle as usize);
+            let slack = rim_slack((0.0, rim(thickness, (e1, e2)), border), (e1, e2), len);
+            if (0..3).any(|k| bary[k] < -slack[k]) {
+                continue;
+            }
+            // Just outside the rim, the nearest point of the edge takes it.
+            let [u, vb, w] = clamped(bary);
+            let [wp, wa, wb, wc] = [ip, ia, ib, ic].map(|i| inv_mass[i]);
+            let weight = wp + wa * u * u + wb * vb * vb + wc * w * w;
+            if !is_positive(weight) {
+                continue;
+            }
+            touching += 1;
+            // Positions: out to the thickness along n.
+            // At most half the thickness a pass: a layer pressed from both
+            // sides (a crumpled fold) is eased apart over a few substeps,
+            // not yanked by contradicting pairs.
+            let depth = (thickness - d).min(0.5 * thickness);
+            let s = depth / weight;
+            x[ip] += n * (wp * s);
+            x[ia] -= n * (wa * u * s);
+            x[ib] -= n * (wb * vb * s);
+            x[ic] -= n * (wc * w * s);
+            // Velocities: no closing, then friction on the sliding part.
+            let surface = v[ia] * u + v[ib] * vb + v[ic] * w;
+            let rel = v[ip] - surface;
+            let vn = rel.dot(n);
+            let closing = (-vn).max(0.0);
+            let slide = rel - n * vn;
+            let speed = slide.length();
+            let grip = friction * (closing + depth / h);
+            let slide_change = if speed > 0.0 {
+                slide * -(grip / speed).min(1.0)
+            } else {
+                Vector::ZERO
+            };
+            // The change of relative velocity `dv` takes an impulse `dv / weight`
+            // (per unit inverse mass), shared as the positions were.
+            let j = (n * closing + slide_change) / weight;
+            v[ip] += j * wp;
+            v[ia] -= j * (wa * u);
+            v[ib] -= j * (wb * vb);
+            v[ic] -= j * (wc * w);
+        }
+        touching
+    }
+
+    /// Pairs found by the last look.
+    pub fn pair_count(&self) -> usize {
+        self.pairs.len()
+    }
+}
+
+/// How far outside each edge of a triangle a particle is still taken, in
+/// barycentric terms (`[u, v, w]` may go that far below 0): `inside` metres
+/// beyond every edge, and `rim` more beyond the edges on the cloth's
+/// border (bit k of `border` for the edge facing corner k), over the
+/// altitude onto that edge. Interior edges need no rim: the triangle
+/// across takes the particle. `len` is `|e1 × e2|`, twice the area.
+#[inline]
+fn rim_slack(
+    (inside, rim, border): (f32, f32, u8),
+    (e1, e2): (Vector, Vector),
+    len: f32,
+) -> [f32; 3] {
+    // The altitude onto an edge is `len / |edge|`; u belongs to corner a,
+    // whose opposite edge is `e2 − e1`.
+    let edges = [(e2 - e1).length(), e2.length(), e1.length()];
+    std::array::from_fn(|k| {
+        let out = inside + if border & (1 << k) != 0 { rim } else { 0.0 };
+        out * edges[k] / len
+    })
+}
+
+/// The rim of a triangle (m): the thickness, but at most a quarter of its
+/// shortest edge, so that the particles beyond the rest-mesh neighbours of
+/// a flat cloth never fall within it.
+#[inline]
+fn rim(thickness: f32, (e1, e2): (Vector, Vector)) -> f32 {
+    let shortest = e1
+        .length_squared()
+        .min(e2.length_squared())
+        .min((e2 - e1).length_squared())
+        .sqrt();
+    thickness.min(0.25 * shortest)
+}
+
+/// Barycentric coordinates clamped to the triangle and summing to one.
+#[inline]
+fn clamped([u, v, w]: [f32; 3]) -> [f32; 3] {
+    let [u, v, w] = [u.max(0.0), v.max(0.0), w.max(0.0)];
+    let sum = u + v + w;
+    [u / sum, v / sum, w / sum]
+}
+
+/// True for a number > 0 (false for NaN).
+#[inline]
+pub(crate) fn is_positive(x: f32) -> bool {
+    x > 0.0
+}
+
+/// Barycentric coordinates `[u, v, w]` (weights of the corners a, b, c) of
+/// the point `a + q` in the plane of the triangle with edges `e1 = b − a`
+/// and `e2 = c − a`; a degenerate triangle gives a point outside (−1).
+#[inline]
+pub(crate) fn barycentric(q: Vector, e1: Vector, e2: Vector) -> [f32; 3] {
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (dq1, dq2) = (q.dot(e1), q.dot(e2));
+    let denom = d11 * d22 - d12 * d12;
+    if !is_positive(denom) {
+        return [-1.0; 3];
+    }
+    let vb = (d22 * dq1 - d12 * dq2) / denom;
+    let w = (d11 * dq2 - d12 * dq1) / denom;
+    [1.0 - vb - w, vb, w]
+}

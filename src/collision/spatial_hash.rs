@@ -1,0 +1,167 @@
+//! A spatial hash of points (Teschner et al. 2003, "Optimized spatial
+//! hashing for collision detection of deformable objects", in the dense
+//! layout of Müller's "Ten minute physics"): cubic cells of one size,
+//! hashed into a table of about twice as many buckets as points, each
+//! bucket's points stored contiguously in point order. Built in O(n)
+//! whenever the points move; allocates nothing once warmed up.
+
+use crate::math::Vector;
+
+/// Points by cell, for "which points lie in this box" queries.
+#[derive(Debug, Default, Clone)]
+pub(crate) struct SpatialHash {
+    /// 1 / cell size, in 1/m.
+    inv_cell: f32,
+    /// Per bucket: where its points start in `entries`; one more entry
+    /// than buckets, the last being the point count.
+    start: Vec<u32>,
+    /// Point indices, bucket by bucket, ascending within a bucket.
+    entries: Vec<u32>,
+    /// Per point: its cell.
+    cells: Vec<[i32; 3]>,
+}
+
+/// Cells a query may visit before it visits every point instead (a box
+/// over a cloth that has flown apart would otherwise take forever).
+const MAX_QUERY_CELLS: i64 = 4096;
+
+impl SpatialHash {
+    /// Hashes `points` into cells of `cell` metres (> 0).
+    pub fn build(&mut self, points: &[Vector], cell: f32) {
+        let n = points.len();
+        self.inv_cell = if cell > 0.0 && cell.is_finite() {
+            1.0 / cell
+        } else {
+            1.0
+        };
+        let buckets = (2 * n).next_power_of_two().max(1);
+        self.start.clear();
+        self.start.resize(buckets + 1, 0);
+        self.entries.clear();
+        self.entries.resize(n, 0);
+        self.cells.clear();
+        for &p in points {
+            let c = self.cell_of(p);
+            self.cells.push(c);
+            let b = self.bucket(c);
+            self.start[b] += 1;
+        }
+        // Running sums: `start[b]` is then where bucket b ends.
+        let mut sum = 0;
+        for s in self.start.iter_mut() {
+            sum += *s;
+            *s = sum;
+        }
+        // Filled from the last point down, so each bucket ends ascending and
+        // `start[b]` where it begins.
+        for i in (0..n).rev() {
+            let b = self.bucket(self.cells[i]);
+            self.start[b] -= 1;
+            self.entries[self.start[b] as usize] = i as u32;
+        }
+    }
+
+    /// Calls `f` once for every point whose cell meets the box `min..=max`
+    /// (metres): every point inside the box, and some near it.
+    pub fn for_each_in(&self, min: Vector, max: Vector, mut f: impl FnMut(u32)) {
+        let (lo, hi) = (self.cell_of(min), self.cell_of(max));
+        let span = |a: usize| (hi[a] as i64 - lo[a] as i64 + 1).max(0);
+        if span(0) * span(1) * span(2) > MAX_QUERY_CELLS {
+            for i in 0..self.cells.len() {
+                let c = self.cells[i];
+                if (0..3).all(|a| lo[a] <= c[a] && c[a] <= hi[a]) {
+                    f(i as u32);
+                }
+            }
+            return;
+        }
+        for_cells((lo, hi), |c| {
+            let b = self.bucket(c);
+            let (s, e) = (self.start[b] as usize, self.start[b + 1] as usize);
+            for &i in &self.entries[s..e] {
+                // Another cell may share the bucket; each point is visited
+                // from its own cell only.
+                if self.cells[i as usize] == c {
+                    f(i);
+                }
+            }
+        });
+    }
+
+    fn cell_of(&self, p: Vector) -> [i32; 3] {
+        cell_of(p, self.inv_cell)
+    }
+
+    fn bucket(&self, c: [i32; 3]) -> usize {
+        bucket(c, self.start.len() - 1)
+    }
+}
+
+/// Calls `f` on every cell of the inclusive range `lo..=hi`.
+fn for_cells((lo, hi): ([i32; 3], [i32; 3]), mut f: impl FnMut([i32; 3])) {
+    for x in lo[0]..=hi[0] {
+        for y in lo[1]..=hi[1] {
+            for z in lo[2]..=hi[2] {
+                f([x, y, z]);
+            }
+        }
+    }
+}
+
+/// The cell of `p` for cells of `1 / inv` metres.
+fn cell_of(p: Vector, inv: f32) -> [i32; 3] {
+    // `as` saturates (and maps NaN to 0): no panic on a wild point.
+    let s = p * inv;
+    [s.x.floor() as i32, s.y.floor() as i32, s.z.floor() as i32]
+}
+
+/// The bucket of cell `c` among `buckets` (a power of two).
+fn bucket([x, y, z]: [i32; 3], buckets: usize) -> usize {
+    let h = x.wrapping_mul(92_837_111) ^ y.wrapping_mul(689_287_499) ^ z.wrapping_mul(283_923_481);
+    (h as u32 as usize) & (buckets - 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every point in a query box is visited exactly once, and none whose
+    /// cell lies outside the box's cells.
+    #[test]
+    fn box_queries_visit_each_point_inside_once() {
+        let mut points = Vec::new();
+        let mut seed = 7u32;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / (1u32 << 24) as f32
+        };
+        for _ in 0..2000 {
+            points.push(Vector::new(rnd() * 2.0 - 1.0, rnd(), rnd() * 0.5));
+        }
+        let mut hash = SpatialHash::default();
+        hash.build(&points, 0.07);
+        for (min, max) in [
+            (Vector::new(-0.2, 0.1, 0.0), Vector::new(0.1, 0.4, 0.2)),
+            (Vector::splat(-5.0), Vector::splat(5.0)),
+            (Vector::new(0.3, 0.3, 0.3), Vector::new(0.31, 0.31, 0.31)),
+        ] {
+            let mut seen = vec![0u32; points.len()];
+            hash.for_each_in(min, max, |i| seen[i as usize] += 1);
+            for (i, p) in points.iter().enumerate() {
+                let inside = p.cmpge(min).all() && p.cmple(max).all();
+                assert!(seen[i] <= 1, "point {i} visited {} times", seen[i]);
+                if inside {
+                    assert_eq!(
+                        seen[i], 1,
+                        "point {i} at {p:?} inside {min:?}..{max:?} missed"
+                    );
+                }
+                if seen[i] == 1 {
+                    let near = p.cmpge(min - Vector::splat(0.07)).all()
+                        && p.cmple(max + Vector::splat(0.07)).all();
+                    assert!(near, "point {i} at {p:?} is a cell away from the box");
+                }
+            }
+        }
+    }
+}
