@@ -34,6 +34,10 @@ pub struct SceneArgs {
     /// Friction coefficient of the obstacles.
     #[arg(long, value_parser = parse_non_negative, allow_hyphen_values = true)]
     pub friction: Option<f32>,
+    /// Keep the cloth from passing through itself: `--self-collision` (or
+    /// `=on`) turns it on, `--self-collision=off` off (default: the scene's).
+    #[arg(long, value_name = "on|off", num_args = 0..=1, require_equals = true, default_missing_value = "on", value_parser = parse_on_off)]
+    pub self_collision: Option<bool>,
     /// Linearisations (Newton iterations) per substep (implicit-euler).
     #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
     pub newton_iterations: Option<u32>,
@@ -67,6 +71,7 @@ impl SceneArgs {
             substeps: self.substeps,
             frames: self.frames,
             friction: self.friction,
+            self_collision: self.self_collision,
             solver: SolverTuning {
                 newton_iterations: self.newton_iterations,
                 cg_iterations: self.cg_iterations,
@@ -99,6 +104,14 @@ pub fn parse_material(s: &str) -> Result<Material, String> {
 /// A pin preset by name.
 pub fn parse_variant(s: &str) -> Result<PinPreset, String> {
     PinPreset::from_name(s).map_err(|e| e.to_string())
+}
+/// `on` or `off` (also `true`/`false`, `yes`/`no`, `1`/`0`).
+pub fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s.to_ascii_lowercase().as_str() {
+        "on" | "true" | "yes" | "1" => Ok(true),
+        "off" | "false" | "no" | "0" => Ok(false),
+        _ => Err(format!("'{s}' is neither on nor off")),
+    }
 }
 /// Substeps: a whole number >= 1 or `auto`.
 pub fn parse_substeps(s: &str) -> Result<Substeps, String> {

@@ -29,6 +29,9 @@ pub struct BenchRow {
     pub threads: usize,
     /// Substeps per frame.
     pub substeps: u32,
+    /// Self-collision on (cloth3d rows).
+    #[serde(default)]
+    pub self_collision: bool,
     /// Median wall time of one frame, in seconds.
     pub frame_wall_s: f64,
     /// Particles × substeps per second.
@@ -98,6 +101,7 @@ pub fn bench_cloth3d(
         integrator: integrator.name().into(),
         threads: threads(),
         substeps,
+        self_collision: scene.cloth.params.self_collision,
         frame_wall_s: frame,
         particle_substeps_per_s: per_s(particles * substeps as f64),
         spring_evals_per_s: integrator
@@ -176,6 +180,7 @@ pub fn bench_rapier_drape(n: usize, warmup: u32, frames: u32) -> BenchRow {
         integrator: "rapier-softbody".into(),
         threads: 1,
         substeps: world.integration_parameters.num_solver_iterations as u32,
+        self_collision: false,
         frame_wall_s: frame,
         particle_substeps_per_s: if frame > 0.0 {
             (n * n) as f64 / frame
@@ -206,8 +211,9 @@ fn curves(rows: &[BenchRow]) -> Vec<super::plot::Curve> {
     // An engine and integrator keeps its colour; more threads draw it darker.
     let mut hues: Vec<String> = Vec::new();
     for row in rows {
-        let base = match row.engine.as_str() {
-            "cloth3d" => format!("cloth3d {}", row.integrator),
+        let base = match (row.engine.as_str(), row.self_collision) {
+            ("cloth3d", false) => format!("cloth3d {}", row.integrator),
+            ("cloth3d", true) => format!("cloth3d {} self-collision", row.integrator),
             _ => row.engine.clone(),
         };
         let label = match row.threads {
@@ -251,6 +257,30 @@ pub fn target_lines(rows: &[BenchRow]) -> Vec<String> {
         }
     };
     let mut lines = Vec::new();
+    // Self-collision's cost (issue 17): the row with it against the row
+    // without, same scene, size, integrator and threads.
+    for on in rows.iter().filter(|r| r.self_collision && r.n == 64) {
+        let off = rows.iter().find(|r| {
+            !r.self_collision
+                && r.engine == on.engine
+                && (&r.scene, r.n, &r.integrator, r.threads)
+                    == (&on.scene, on.n, &on.integrator, on.threads)
+        });
+        if let Some(off) = off {
+            let extra = on.frame_wall_s / off.frame_wall_s.max(1e-12) - 1.0;
+            lines.push(format!(
+                "{} {} N=64 {} thr: self-collision adds <= 50%: {:+.0}% ({})",
+                on.scene,
+                on.integrator,
+                on.threads,
+                100.0 * extra,
+                verdict(1.5 / (1.0 + extra).max(1e-12))
+            ));
+        }
+    }
+    // The other targets are without self-collision.
+    let plain: Vec<BenchRow> = rows.iter().filter(|r| !r.self_collision).cloned().collect();
+    let rows = &plain[..];
     // Every target is for one thread, but the one that says so.
     for row in rows
         .iter()
@@ -358,6 +388,7 @@ mod tests {
             integrator: integrator.into(),
             threads: 1,
             substeps: 1,
+            self_collision: false,
             frame_wall_s: frame_ms / 1000.0,
             particle_substeps_per_s: 1.0,
             spring_evals_per_s: springs,

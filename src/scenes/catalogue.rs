@@ -28,17 +28,21 @@ pub enum SceneKind {
     Curtain,
     /// A 32×32 hammock on its four corners catching three dynamic rapier boxes.
     Hammock,
+    /// A 48×48 cloth dropped over a thin bar onto the ground, folding onto
+    /// itself (self-collision on).
+    Fold,
 }
 
 impl SceneKind {
     /// Every scene.
-    pub const ALL: [SceneKind; 6] = [
+    pub const ALL: [SceneKind; 7] = [
         SceneKind::Drape,
         SceneKind::Box,
         SceneKind::Flag,
         SceneKind::Pins,
         SceneKind::Curtain,
         SceneKind::Hammock,
+        SceneKind::Fold,
     ];
 
     /// The scene's name.
@@ -50,6 +54,7 @@ impl SceneKind {
             SceneKind::Pins => "pins",
             SceneKind::Curtain => "curtain",
             SceneKind::Hammock => "hammock",
+            SceneKind::Fold => "fold",
         }
     }
 
@@ -62,6 +67,9 @@ impl SceneKind {
             SceneKind::Pins => "a cloth hangs from a pinning figure (variants)",
             SceneKind::Curtain => "a curtain is pushed aside by a moving kinematic rapier ball",
             SceneKind::Hammock => "a hammock catches three dynamic rapier boxes (two-way coupling)",
+            SceneKind::Fold => {
+                "a cloth falls over a thin bar and folds onto itself on the ground (self-collision)"
+            }
         }
     }
 
@@ -102,6 +110,7 @@ impl SceneKind {
             SceneKind::Pins => (33, 33),
             SceneKind::Curtain => (40, 40),
             SceneKind::Hammock => (32, 32),
+            SceneKind::Fold => (48, 48),
         }
     }
 }
@@ -112,6 +121,13 @@ impl std::str::FromStr for SceneKind {
         Self::from_name(s)
     }
 }
+
+/// Height of the `fold` scene's bar (its axis, metres above the ground).
+pub const FOLD_BAR_HEIGHT: f32 = 0.4;
+/// Radius of the `fold` scene's bar, in metres.
+pub const FOLD_BAR_RADIUS: f32 = 0.02;
+/// How far (m, along x) the `fold` cloth's centre starts from the bar.
+pub const FOLD_OFFSET: f32 = 0.12;
 
 /// Where the curtain's ball is (z, metres) `t` seconds into the scene.
 pub fn curtain_ball_z(t: f32) -> f32 {
@@ -150,6 +166,18 @@ impl SceneKind {
                 },
             ),
             SceneKind::Hammock => ClothDesc::new(cols, rows, horizontal(0.5)),
+            SceneKind::Fold => {
+                // Off the bar's axis, so one side hangs longer and lands first.
+                let mut c = ClothDesc::new(
+                    cols,
+                    rows,
+                    Placement::Horizontal {
+                        center: Vector::new(FOLD_OFFSET, FOLD_BAR_HEIGHT + 0.1, 0.0),
+                    },
+                );
+                c.self_collision = true;
+                c
+            }
         };
         cloth.pins = PinsDesc::preset(match self {
             SceneKind::Flag => PinPreset::FlagColumn,
@@ -191,6 +219,24 @@ impl SceneKind {
                     },
                 ];
                 desc.bodies.push(ball);
+            }
+            SceneKind::Fold => {
+                desc.obstacles.push(ObstacleDesc::fixed(
+                    ShapeDesc::Cuboid {
+                        half_extents: Vector::new(2.0, 0.1, 2.0),
+                    },
+                    Vector::new(0.0, -0.1, 0.0),
+                ));
+                let mut bar = ObstacleDesc::fixed(
+                    ShapeDesc::Capsule {
+                        half_height: 0.8,
+                        radius: FOLD_BAR_RADIUS,
+                    },
+                    Vector::new(0.0, FOLD_BAR_HEIGHT, 0.0),
+                );
+                // The capsule's axis (local y) along z.
+                bar.rotation = Vector::new(std::f32::consts::FRAC_PI_2, 0.0, 0.0);
+                desc.obstacles.push(bar);
             }
             SceneKind::Hammock => {
                 desc.bodies.push(BodyDesc::new(

@@ -122,6 +122,11 @@ pub struct ClothDesc {
     /// Pinned particles.
     #[serde(default, skip_serializing_if = "PinsDesc::is_empty")]
     pub pins: PinsDesc,
+    /// Keep the cloth from passing through itself: its particles stay the
+    /// scene's thickness away from its own triangles, with the scene's
+    /// friction between layers (off by default: it costs time).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub self_collision: bool,
 }
 
 /// Where a cloth starts.
@@ -597,6 +602,7 @@ impl ClothDesc {
             mass: default_mass(),
             material: MaterialDesc::default(),
             pins: PinsDesc::default(),
+            self_collision: false,
         }
     }
 }
@@ -633,6 +639,9 @@ fn no_pins() -> PinPreset {
 }
 fn is_no_pins(p: &PinPreset) -> bool {
     *p == PinPreset::None
+}
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 fn is_zero(v: &Vector) -> bool {
     *v == Vector::ZERO

@@ -27,6 +27,8 @@ pub struct SceneOptions {
     pub frames: Option<u32>,
     /// Friction of every obstacle (default 0.5).
     pub friction: Option<f32>,
+    /// Keep the cloth from passing through itself (default: the scene's).
+    pub self_collision: Option<bool>,
     /// The solver's iterations and tolerances.
     pub solver: SolverTuning,
 }
@@ -52,7 +54,8 @@ pub struct SolverTuning {
 
 impl SceneDesc {
     /// Applies the user's overrides: grid (rows follow the aspect ratio),
-    /// integrator, material, pin preset, dt, substeps, frames, friction.
+    /// integrator, material, pin preset, dt, substeps, self-collision, frames,
+    /// friction.
     pub fn apply(&mut self, options: &SceneOptions) -> Result<(), ClothError> {
         if let Some(n) = options.n {
             let (c, r) = (self.cloth.cols, self.cloth.rows);
@@ -102,6 +105,9 @@ impl SceneDesc {
             settings.edge_collisions = edges;
         }
         settings.validate()?;
+        if let Some(on) = options.self_collision {
+            self.cloth.self_collision = on;
+        }
         if let Some(f) = options.frames {
             self.frames = f;
         }

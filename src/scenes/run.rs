@@ -6,6 +6,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use super::world::Scene;
+use crate::collision::self_intersections;
 use crate::error::ClothError;
 use crate::metrics::max_stretch;
 use crate::solver::SolverSettings;
@@ -42,6 +43,13 @@ pub struct RunMetrics {
     pub max_penetration_any_frame: f32,
     /// Largest stretch-spring strain on the final frame.
     pub max_stretch: f32,
+    /// Where the cloth passes through itself on the final frame: pairs of a
+    /// particle and a triangle not its neighbours closer than half the
+    /// thickness, and triangle edges crossing triangles
+    /// ([`crate::collision::self_intersections`]).
+    pub self_intersections: usize,
+    /// The most self-intersections of any frame.
+    pub self_intersections_any_frame: usize,
     /// Lowest particle height on the final frame, in metres.
     pub min_y: f32,
     /// Centre of the cloth on the final frame, in metres.
@@ -86,6 +94,7 @@ pub fn run_with(
     let mut max_substeps = 0u32;
     let mut iterations = 0u64;
     let mut deepest_any = 0.0f32;
+    let mut crossings_any = 0;
     for f in 0..frames {
         let start = Instant::now();
         let report = scene.step_frame()?;
@@ -95,6 +104,7 @@ pub fn run_with(
         iterations += report.iterations as u64;
         let deepest = scene.max_penetration();
         deepest_any = deepest_any.max(deepest);
+        crossings_any = crossings_any.max(self_intersections(&scene.cloth));
         on_frame(scene, f, deepest);
     }
     let cloth = &scene.cloth;
@@ -124,6 +134,8 @@ pub fn run_with(
         max_penetration: scene.max_penetration(),
         max_penetration_any_frame: deepest_any,
         max_stretch: max_stretch(cloth),
+        self_intersections: self_intersections(cloth),
+        self_intersections_any_frame: crossings_any,
         min_y,
         centroid: [c.x, c.y, c.z],
         energy: cloth.energy().total(),

@@ -164,6 +164,8 @@ impl Scene {
         cloth.params.gravity = desc.gravity;
         cloth.params.air_drag = desc.air_drag;
         cloth.params.thickness = desc.thickness;
+        cloth.params.self_collision = c.self_collision;
+        cloth.params.self_friction = desc.friction;
         cloth.params.validate()?;
         desc.solver
             .validate()

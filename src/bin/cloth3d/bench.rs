@@ -3,8 +3,8 @@
 use std::process::ExitCode;
 
 use cloth3d::cli::args::{
-    parse_count, parse_frames, parse_integrator, parse_iterations, parse_n, parse_scene,
-    parse_substeps,
+    parse_count, parse_frames, parse_integrator, parse_iterations, parse_n, parse_on_off,
+    parse_scene, parse_substeps,
 };
 use cloth3d::scenes::SceneKind;
 use cloth3d::scenes::{SceneOptions, SolverTuning};
@@ -33,6 +33,10 @@ pub struct BenchArgs {
     /// Rapier's cloth runs on one.
     #[arg(long, value_parser = parse_frames, default_values = ["1"], allow_hyphen_values = true)]
     pub threads: Vec<u32>,
+    /// Self-collision on or off (repeatable: each row once per value;
+    /// default: the scene's own).
+    #[arg(long = "self-collision", value_name = "on|off", value_parser = parse_on_off)]
+    pub self_collision: Vec<bool>,
     /// Substeps per frame for every row (`auto` or a count; default: each integrator's own).
     #[arg(long, value_parser = parse_substeps)]
     pub substeps: Option<Substeps>,
@@ -94,11 +98,12 @@ fn bench_rows(args: &BenchArgs, pools: &[Threads]) -> ExitCode {
     use cloth3d::cli::bench::{bench_cloth3d, bench_rapier_drape, BenchRow};
     if !args.json {
         emit(&format!(
-            "{:<8} {:>5} {:<18} {:>3} {:>8} {:>11} {:>14} {:>14} {:>9} {:>9} {:>9}\n",
+            "{:<8} {:>5} {:<18} {:>3} {:>4} {:>8} {:>11} {:>14} {:>14} {:>9} {:>9} {:>9}\n",
             "scene",
             "n",
             "integrator",
             "thr",
+            "self",
             "substeps",
             "ms/frame",
             "part.sub/s",
@@ -126,11 +131,16 @@ fn bench_rows(args: &BenchArgs, pools: &[Threads]) -> ExitCode {
             ));
         } else {
             emit(&format!(
-                "{:<8} {:>5} {:<18} {:>3} {:>8} {:>11.2} {:>14.3e} {:>14} {:>8.2}% {:>8.4} {:>9}\n",
+                "{:<8} {:>5} {:<18} {:>3} {:>4} {:>8} {:>11.2} {:>14.3e} {:>14} {:>8.2}% {:>8.4} {:>9}\n",
                 row.scene,
                 row.n,
                 row.integrator,
                 row.threads,
+                match (row.engine.as_str(), row.self_collision) {
+                    ("cloth3d", true) => "on",
+                    ("cloth3d", false) => "off",
+                    _ => "-",
+                },
                 row.substeps,
                 1000.0 * row.frame_wall_s,
                 row.particle_substeps_per_s,
@@ -159,8 +169,20 @@ fn bench_rows(args: &BenchArgs, pools: &[Threads]) -> ExitCode {
                     }
                     continue;
                 }
-                for pool in pools {
+                let choices: Vec<Option<bool>> = if args.self_collision.is_empty() {
+                    vec![None]
+                } else {
+                    args.self_collision.iter().map(|&on| Some(on)).collect()
+                };
+                for (pool, self_collision) in pools
+                    .iter()
+                    .flat_map(|p| choices.iter().map(move |&c| (p, c)))
+                {
                     let frames = (args.warmup, args.frames);
+                    let tuning = SceneOptions {
+                        self_collision,
+                        ..tuning.clone()
+                    };
                     match pool.run(|| bench_cloth3d(kind, n, integrator, frames, &tuning)) {
                         Ok(mut row) => {
                             row.speedup_vs_rapier = rapier
