@@ -50,8 +50,13 @@ fn the_default_solver_gives_the_same_bits_on_two_threads_as_on_one() {
     // xpbd's sweep in bands, its particle loops and the collision stage's
     // blocks on a team; the drape lying on its ball (contacts, friction,
     // the edge pass) and the hammock with its dynamic boxes (momentum
-    // handed to rapier, summed in particle order).
-    for (kind, n, frames) in [(SceneKind::Drape, 64, 40), (SceneKind::Hammock, 64, 60)] {
+    // handed to rapier, summed in particle order); the fold's
+    // self-collision, whose look for pairs runs on the team.
+    for (kind, n, frames) in [
+        (SceneKind::Drape, 64, 40),
+        (SceneKind::Hammock, 64, 60),
+        (SceneKind::Fold, 48, 60),
+    ] {
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
@@ -65,9 +70,11 @@ fn the_default_solver_gives_the_same_bits_on_two_threads_as_on_one() {
                 };
                 let mut scene = Scene::build(kind, &options).unwrap();
                 assert_eq!(scene.solver.settings.integrator, Integrator::Xpbd);
-                let mut contacts = 0;
+                let (mut contacts, mut self_contacts) = (0, 0);
                 for _ in 0..frames {
-                    contacts += scene.step_frame().unwrap().contacts;
+                    let report = scene.step_frame().unwrap();
+                    contacts += report.contacts;
+                    self_contacts += report.self_contacts;
                 }
                 let bodies: Vec<u32> = scene
                     .rapier
@@ -78,11 +85,14 @@ fn the_default_solver_gives_the_same_bits_on_two_threads_as_on_one() {
                         t.into_iter().chain(v).map(f32::to_bits)
                     })
                     .collect();
-                (bits(&scene.cloth), bodies, contacts)
+                (bits(&scene.cloth), bodies, contacts, self_contacts)
             })
         };
         let one = run(1);
         assert!(one.2 > 0, "{kind:?}: no contact in the run");
+        if kind == SceneKind::Fold {
+            assert!(one.3 > 0, "the fold's layers never touched");
+        }
         if kind == SceneKind::Hammock {
             assert!(!one.1.is_empty(), "the hammock has bodies");
         }

@@ -1,0 +1,195 @@
+//! Self-collision: a cloth's layers are kept a thickness apart, by every
+//! integrator, and without it they pass through each other.
+
+mod common;
+
+use cloth3d::collision::self_intersections;
+use cloth3d::prelude::*;
+use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
+use common::bits;
+
+/// Columns of the folded strip; the right half is laid over the left.
+const COLS: usize = 20;
+const ROWS: usize = 10;
+const THICKNESS: f32 = 0.01;
+
+/// A 0.5 m × 0.25 m strip folded in two: its right half lies `gap` metres
+/// above its left half, mirrored about the middle (column c over column
+/// `COLS − 1 − c`), so each upper particle sits right above a lower one.
+fn folded_strip(gap: f32, self_collision: bool) -> Cloth {
+    let mut cloth = ClothBuilder::new(COLS, ROWS)
+        .size(0.5, 0.25)
+        .horizontal(Vector::new(0.0, 0.0, 0.0))
+        .material(Material::by_name("cotton").unwrap())
+        .self_collision(self_collision)
+        .build()
+        .unwrap();
+    cloth.params.thickness = THICKNESS;
+    for r in 0..ROWS {
+        for c in COLS / 2..COLS {
+            let i = cloth.index(r, c).unwrap();
+            let below = cloth.positions()[cloth.index(r, COLS - 1 - c).unwrap()];
+            cloth
+                .set_position(i, below + Vector::new(0.0, gap, 0.0))
+                .unwrap();
+        }
+    }
+    cloth
+}
+
+/// Upper particles (right half, away from the hinge) and the lower
+/// particle right under each.
+fn layers(cloth: &Cloth) -> Vec<(usize, usize)> {
+    (0..ROWS)
+        .flat_map(|r| (COLS / 2 + 2..COLS).map(move |c| (r, c)))
+        .map(|(r, c)| {
+            (
+                cloth.index(r, c).unwrap(),
+                cloth.index(r, COLS - 1 - c).unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// The lower layer pinned flat, and the upper one at the fold (where the
+/// two are neighbours in the rest shape and only the bending springs keep
+/// them apart); the upper layer falls onto the lower one and one of its
+/// particles is thrown down at 3 m/s. With self-collision every upper
+/// particle stays about a thickness above the particle under it (the
+/// thrown one too); without, the thrown particle goes through.
+#[test]
+fn a_particle_driven_into_the_cloth_is_kept_out_by_the_thickness() {
+    let run = |self_collision: bool| {
+        let mut cloth = folded_strip(0.05, self_collision);
+        for r in 0..ROWS {
+            for c in 0..COLS / 2 + 2 {
+                cloth.pin_cell(r, c).unwrap();
+            }
+        }
+        let thrown = cloth.index(ROWS / 2, COLS - 3).unwrap();
+        cloth
+            .set_velocity(thrown, Vector::new(0.0, -3.0, 0.0))
+            .unwrap();
+        let mut solver = ClothSolver::default();
+        let mut lowest = f32::INFINITY;
+        for _ in 0..60 {
+            solver.step(&mut cloth, 1.0 / 60.0, &[]).unwrap();
+            let x = cloth.positions();
+            for &(up, down) in &layers(&cloth) {
+                lowest = lowest.min(x[up].y - x[down].y);
+            }
+        }
+        (lowest, cloth.positions()[thrown].y)
+    };
+    let (gap, _) = run(true);
+    assert!(
+        gap > 0.5 * THICKNESS,
+        "an upper particle came {gap} m above the lower layer (thickness {THICKNESS})"
+    );
+    let (gap_off, thrown_y) = run(false);
+    assert!(
+        gap_off < -THICKNESS && thrown_y < -THICKNESS,
+        "without self-collision the thrown particle should pass through: gap {gap_off}, y {thrown_y}"
+    );
+}
+
+/// The folded strip dropped on the ground: the two layers land on each
+/// other and stay at least half the thickness apart, with no crossing
+/// anywhere (symplectic Euler and xpbd alike).
+#[test]
+fn two_layers_dropped_on_the_ground_stay_apart() {
+    for integrator in [Integrator::Xpbd, Integrator::SymplecticEuler] {
+        let mut cloth = folded_strip(0.04, true);
+        for i in 0..cloth.particle_count() {
+            let p = cloth.positions()[i];
+            cloth
+                .set_position(i, p + Vector::new(0.0, 0.3, 0.0))
+                .unwrap();
+        }
+        let ground = Obstacle::cuboid(
+            Vector::new(2.0, 0.1, 2.0),
+            Pose::from_translation(Vector::new(0.0, -0.1, 0.0)),
+        );
+        let mut solver = ClothSolver::with_integrator(integrator);
+        for frame in 0..90 {
+            solver
+                .step(&mut cloth, 1.0 / 60.0, std::slice::from_ref(&ground))
+                .unwrap();
+            assert_eq!(self_intersections(&cloth), 0, "{integrator}: frame {frame}");
+        }
+        let x = cloth.positions();
+        let gap = layers(&cloth)
+            .iter()
+            .map(|&(up, down)| x[up].y - x[down].y)
+            .fold(f32::INFINITY, f32::min);
+        assert!(gap >= 0.5 * THICKNESS, "{integrator}: layers {gap} m apart");
+        let lowest = x.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
+        assert!(
+            lowest > 0.0,
+            "{integrator}: the strip did not land ({lowest})"
+        );
+        assert!(
+            lowest < 2.0 * THICKNESS,
+            "{integrator}: the strip is not on the ground ({lowest})"
+        );
+    }
+}
+
+/// The `fold` scene (self-collision on by default) ends with no
+/// self-intersection and has few in any frame; with self-collision off
+/// the halves pass through each other under the bar.
+#[test]
+fn the_fold_scene_needs_self_collision() {
+    let run = |on: bool| {
+        let mut scene = Scene::build(
+            SceneKind::Fold,
+            &SceneOptions {
+                self_collision: Some(on),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(scene.cloth.params.self_collision, on);
+        cloth3d::scenes::run(&mut scene, 120).unwrap()
+    };
+    let on = run(true);
+    assert!(on.finite);
+    assert_eq!(on.self_intersections, 0, "{on:?}");
+    assert!(on.self_intersections_any_frame <= 10, "{on:?}");
+    assert!(on.max_penetration_any_frame <= 0.001, "{on:?}");
+    let off = run(false);
+    assert!(off.self_intersections > 100, "{off:?}");
+}
+
+/// A snapshot taken while the layers touch continues bit for bit: the
+/// pairs are looked for afresh at the start of every step.
+#[test]
+fn a_snapshot_during_self_contact_continues_bit_for_bit() {
+    let mut cloth = folded_strip(0.02, true);
+    let mut solver = ClothSolver::default();
+    for _ in 0..20 {
+        solver.step(&mut cloth, 1.0 / 60.0, &[]).unwrap();
+    }
+    let (mut copy, mut fresh) = (cloth.clone(), ClothSolver::new(solver.settings.clone()));
+    let mut touching = 0;
+    for _ in 0..20 {
+        touching += solver
+            .step(&mut cloth, 1.0 / 60.0, &[])
+            .unwrap()
+            .self_contacts;
+        fresh.step(&mut copy, 1.0 / 60.0, &[]).unwrap();
+    }
+    assert!(touching > 0, "the layers never touched");
+    assert_eq!(bits(&cloth), bits(&copy));
+}
+
+/// Bad input is refused: a negative friction between layers.
+#[test]
+fn a_negative_self_friction_is_refused() {
+    let mut cloth = folded_strip(0.05, true);
+    cloth.params.self_friction = -0.1;
+    let err = ClothSolver::default()
+        .step(&mut cloth, 1.0 / 60.0, &[])
+        .unwrap_err();
+    assert!(err.to_string().contains("self friction"), "{err}");
+}
