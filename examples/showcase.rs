@@ -9,7 +9,7 @@
 //! cargo run --release --features viewer --example showcase -- --scene examples/scenes/capsule_drape.ron
 //! ```
 //!
-//! Keys: 1–6 scene · I integrator · M material · P pin preset · Space pause ·
+//! Keys: 1–7 scene · I integrator · M material · P pin preset · Space pause ·
 //! N one frame · R reset · W wind · T spring trace · click a particle to
 //! select it · X pin/unpin it · Ctrl+drag to pull it · H help.
 
@@ -220,6 +220,7 @@ async fn interactive(source: String, options: SceneOptions) {
                         Key::Key4,
                         Key::Key5,
                         Key::Key6,
+                        Key::Key7,
                     ]
                     .iter()
                     .position(|k| *k == key);
@@ -376,7 +377,7 @@ fn overlay_text(window: &mut Window, font: &std::sync::Arc<Font>, app: &Showcase
         );
     }
     if app.help {
-        let help = "1-6 scene  I integrator  M material  P pins  Space pause  N step  R reset  W wind  T trace  click select  X pin  Ctrl+drag pull  H help";
+        let help = "1-7 scene  I integrator  M material  P pins  Space pause  N step  R reset  W wind  T trace  click select  X pin  Ctrl+drag pull  H help";
         let y = window.size()[1] as f32 * window.scale_factor() as f32 - 30.0;
         window.draw_text(
             help,
@@ -458,6 +459,13 @@ fn controls(window: &mut Window, app: &mut Showcase) {
                     if let Some(side) = &mut app.scene.rapier {
                         side.coupling.friction = friction;
                     }
+                }
+                ui.checkbox(&mut cloth.params.self_collision, "self-collision");
+                if cloth.params.self_collision {
+                    ui.add(
+                        egui::Slider::new(&mut cloth.params.self_friction, 0.0..=2.0)
+                            .text("friction between layers"),
+                    );
                 }
                 ui.add(egui::Slider::new(&mut dt, 1.0 / 240.0..=1.0 / 20.0).text("dt (s)"));
                 let mut auto = solver.settings.substeps == Substeps::Auto;

@@ -215,6 +215,24 @@ impl Cloth {
         self.time
     }
 
+    /// The distance (m) self-collision keeps the cloth's layers apart:
+    /// `params.self_thickness`, or else the collision thickness but at most
+    /// a quarter of the shortest stretch spring's rest length. A layer
+    /// thickness near the spacing fights the springs wherever the cloth
+    /// pleats (a tablecloth draped on a ball: single springs stretched 25–31%
+    /// at 1 cm with a 1.6 cm spacing, 4.6% at 4 mm).
+    pub fn self_thickness(&self) -> f32 {
+        if let Some(t) = self.params.self_thickness {
+            return t;
+        }
+        let springs = &self.topology.springs;
+        let shortest = springs
+            .range(SpringKind::Stretch)
+            .map(|s| springs.rest[s])
+            .fold(f32::INFINITY, f32::min);
+        self.params.thickness.min(0.25 * shortest)
+    }
+
     /// Total mass in kg.
     pub fn total_mass(&self) -> f32 {
         self.particles.mass.iter().sum()

@@ -60,6 +60,11 @@ pub struct PhysicsParams {
     /// Coulomb friction between touching layers of the cloth.
     #[serde(default = "default_self_friction")]
     pub self_friction: f32,
+    /// Distance the cloth's layers keep from each other, in metres; `None`:
+    /// the collision thickness, but at most a quarter of the shortest
+    /// stretch spring ([`crate::cloth::Cloth::self_thickness`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub self_thickness: Option<f32>,
 }
 
 fn default_self_friction() -> f32 {
@@ -75,6 +80,7 @@ impl Default for PhysicsParams {
             thickness: 0.01,
             self_collision: false,
             self_friction: default_self_friction(),
+            self_thickness: None,
         }
     }
 }
@@ -88,6 +94,9 @@ impl PhysicsParams {
         non_negative("wind strength", self.wind.strength)?;
         non_negative("thickness", self.thickness)?;
         non_negative("self friction", self.self_friction)?;
+        if let Some(t) = self.self_thickness {
+            non_negative("self thickness", t)?;
+        }
         Ok(())
     }
 }

@@ -20,9 +20,8 @@ pub(crate) struct MeshNeighbours {
     edge_start: Vec<u32>,
     /// Far ends of triangle edges, ascending per particle.
     edges: Vec<u32>,
-    /// Per triangle: bit k set when the edge facing its corner k is on the
-    /// cloth's border (no other triangle shares it).
-    border: Vec<u8>,
+    /// The cloth's border edges (lower index first), ascending.
+    border_edges: Vec<[u32; 2]>,
     /// For a grid cloth: columns, and the rest spacing along a row and
     /// along a column (m), from which rest distances follow.
     grid: Option<(u32, f32, f32)>,
@@ -63,21 +62,11 @@ impl MeshNeighbours {
             })
             .collect();
         all.sort_unstable();
-        let shared = |e: (u32, u32)| {
-            let first = all.partition_point(|&x| x < e);
-            all.get(first + 1) == Some(&e)
-        };
-        self.border = topology
-            .triangles
+        self.border_edges = all
             .iter()
-            .map(|t| {
-                let facing = [(t[1], t[2]), (t[2], t[0]), (t[0], t[1])];
-                (0..3)
-                    .filter(|&k| {
-                        !shared((facing[k].0.min(facing[k].1), facing[k].0.max(facing[k].1)))
-                    })
-                    .fold(0u8, |m, k| m | 1 << k)
-            })
+            .enumerate()
+            .filter(|&(k, e)| all.get(k + 1) != Some(e) && (k == 0 || all[k - 1] != *e))
+            .map(|(_, &(a, b))| [a, b])
             .collect();
         self.grid = topology.grid.and_then(|g| {
             let rest = |a: usize, b: usize| {
@@ -99,10 +88,9 @@ impl MeshNeighbours {
         tri.iter().any(|c| joined.binary_search(c).is_ok())
     }
 
-    /// Which edges of triangle `t` lie on the cloth's border: bit k for the
-    /// edge facing corner k.
-    pub fn border(&self, t: usize) -> u8 {
-        self.border.get(t).copied().unwrap_or(0)
+    /// The cloth's border edges: those of one triangle only.
+    pub fn border_edges(&self) -> &[[u32; 2]] {
+        &self.border_edges
     }
 
     /// The particles of the same smooth sheet as triangle `tri`: on a
@@ -185,6 +173,9 @@ mod tests {
             "(3, 3) is two cells from the triangle's nearest corner"
         );
         let edges: usize = (0..25).map(|p| nb.edges_from(p).len()).sum();
+        // The 4 × 4 cells' outline.
+        assert_eq!(nb.border_edges().len(), 16);
+        assert!(nb.border_edges().contains(&[0, 1]) && nb.border_edges().contains(&[19, 24]));
         // 4×4 cells of two triangles: 2·5·4 grid edges and 16 diagonals.
         assert_eq!(edges, 2 * 5 * 4 + 16);
     }

@@ -40,6 +40,18 @@ struct SelfPair {
     side: f32,
 }
 
+/// An edge of the cloth's border near another edge of the same cloth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct EdgePair {
+    /// The border edge.
+    border: [u32; 2],
+    /// The other edge.
+    other: [u32; 2],
+    /// +1 when the border edge lay on the side `(b − a) × (q − p)` points
+    /// to from the other edge, −1 on the other.
+    side: f32,
+}
+
 /// The self-collision stage of a cloth's solver: its pairs and scratch.
 /// Nothing in it carries over from one step to the next (the first
 /// substep of every step looks afresh).
@@ -51,6 +63,8 @@ pub struct SelfContacts {
     blocks: Vec<PairList>,
     neighbours: MeshNeighbours,
     pairs: Vec<SelfPair>,
+    /// Border edges near other edges, found by the last look.
+    edge_pairs: Vec<EdgePair>,
     /// Substeps between looks in this step.
     interval: u32,
     /// How far (m) particles may move relative to each other between looks.
@@ -96,7 +110,7 @@ impl Look<'_> {
         let rim = rim(self.thickness, (e1, e2));
         // A particle may slide `margin` towards the triangle before the next
         // look: accept projections that far outside.
-        let slack = rim_slack((self.margin, rim, neighbours.border(t)), (e1, e2), area2);
+        let slack = rim_slack(self.margin + rim, (e1, e2), area2);
         // Particles of the same smooth sheet as the triangle, up to as far as
         // a pair can reach from its corners, are left to the springs.
         let sheet = neighbours.sheet(tri, reach + rim + e1.length().max(e2.length()));
@@ -128,6 +142,75 @@ impl Look<'_> {
     }
 }
 
+impl Look<'_> {
+    /// Pushes the edges within reach of the border edge `[a, b]` that are
+    /// neither its neighbours nor of its smooth sheet (each such pair of
+    /// border edges once).
+    fn border_edge(
+        &self,
+        [ia, ib]: [u32; 2],
+        (hash, neighbours): (&SpatialHash, &MeshNeighbours),
+        out: &mut Vec<EdgePair>,
+    ) {
+        let x = self.x;
+        let (a, b) = (x[ia as usize], x[ib as usize]);
+        let u = b - a;
+        let length = u.length();
+        // An edge within reach has its lower end within reach plus an edge
+        // length (edges are about as long as this one; twice for margin).
+        let pad = Vector::splat(self.reach + 2.0 * length);
+        let (lo, hi) = (a.min(b) - pad, a.max(b) + pad);
+        let sheet = neighbours.sheet([ia, ib, ib], self.reach + 2.0 * length);
+        let borders = neighbours.border_edges();
+        hash.for_each_in(lo, hi, |p| {
+            if sheet.holds(p) {
+                return;
+            }
+            for &q in neighbours.edges_from(p) {
+                if q == ia || q == ib || p == ia || p == ib || sheet.holds(q) {
+                    continue;
+                }
+                // Two border edges meet from both sides: keep the lower one's.
+                if [p, q] < [ia, ib] && borders.binary_search(&[p, q]).is_ok() {
+                    continue;
+                }
+                let (xp, v) = (x[p as usize], x[q as usize] - x[p as usize]);
+                let Some((s, t, n)) = closest(a, u, xp, v) else {
+                    continue;
+                };
+                let gap = (a + u * s - xp - v * t).dot(n);
+                if gap.abs() < self.reach {
+                    out.push(EdgePair {
+                        border: [ia, ib],
+                        other: [p, q],
+                        side: if gap >= 0.0 { 1.0 } else { -1.0 },
+                    });
+                }
+            }
+        });
+    }
+}
+
+/// Where two segments `a + s u` and `p + t v` come closest, when that is
+/// inside both (`0 < s, t < 1`) and they are not near parallel: `(s, t)`
+/// and the unit normal `u × v / |u × v|`.
+#[inline]
+fn closest(a: Vector, u: Vector, p: Vector, v: Vector) -> Option<(f32, f32, Vector)> {
+    let cross = u.cross(v);
+    let len2 = cross.length_squared();
+    // Within about 6° of parallel the faces' pairs take over.
+    if !is_positive(len2 - 0.01 * u.length_squared() * v.length_squared()) {
+        return None;
+    }
+    let w = a - p;
+    let (uu, uv, vv, uw, vw) = (u.dot(u), u.dot(v), v.dot(v), u.dot(w), v.dot(w));
+    let denom = uu * vv - uv * uv;
+    let s = (uv * vw - vv * uw) / denom;
+    let t = (uu * vw - uv * uw) / denom;
+    let inside = |r: f32| r > 0.0 && r < 1.0;
+    (inside(s) && inside(t)).then(|| (s, t, cross / len2.sqrt()))
+}
+
 /// What a self-collision pass works with.
 pub(crate) struct SelfContactParams {
     /// Distance layers keep, in metres.
@@ -140,13 +223,15 @@ pub(crate) struct SelfContactParams {
 
 impl SelfContacts {
     /// At the start of a step of `substeps` substeps of `h` seconds: how
-    /// often to look, from how fast particles move relative to the mean.
+    /// often to look, from how fast particles move relative to the mean,
+    /// so that they move at most about `travel` metres (the collision
+    /// thickness) relative to each other between looks.
     pub(crate) fn begin_step(
         &mut self,
         p: &Particles,
         topology: &Topology,
         (h, substeps): (f32, u32),
-        thickness: f32,
+        travel: f32,
     ) {
         self.neighbours.update(topology, p.x.len());
         let n = p.v.len().max(1) as f32;
@@ -158,7 +243,7 @@ impl SelfContacts {
                 .sqrt();
         // Two particles may close in on each other at twice the fastest speed.
         let closing = 2.0 * fastest * h;
-        let target = thickness.max(1.0e-4);
+        let target = travel.max(1.0e-4);
         self.interval = if closing > 0.0 && closing.is_finite() {
             ((target / closing).floor() as u32).clamp(1, substeps.max(1))
         } else {
@@ -184,6 +269,7 @@ impl SelfContacts {
     /// number of threads).
     pub(crate) fn find(&mut self, x: &[Vector], topology: &Topology, thickness: f32, team: Team) {
         self.pairs.clear();
+        self.edge_pairs.clear();
         let triangles = &topology.triangles;
         if triangles.is_empty() {
             return;
@@ -221,6 +307,11 @@ impl SelfContacts {
         });
         for list in &self.blocks[..blocks] {
             self.pairs.extend_from_slice(&list.0);
+        }
+        self.edge_pairs.clear();
+        let (neighbours, hash, edge_pairs) = (&self.neighbours, &self.hash, &mut self.edge_pairs);
+        for &border in neighbours.border_edges() {
+            look.border_edge(border, (hash, neighbours), edge_pairs);
         }
     }
 
@@ -264,8 +355,7 @@ impl SelfContacts {
                 continue;
             }
             let bary = barycentric(xp - n * d - a, e1, e2);
-            let border = self.neighbours.border(pair.triangle as usize);
-            let slack = rim_slack((0.0, rim(thickness, (e1, e2)), border), (e1, e2), len);
+            let slack = rim_slack(rim(thickness, (e1, e2)), (e1, e2), len);
             if (0..3).any(|k| bary[k] < -slack[k]) {
                 continue;
             }
@@ -308,6 +398,42 @@ impl SelfContacts {
             v[ib] -= j * (wb * vb);
             v[ic] -= j * (wc * w);
         }
+        for pair in &self.edge_pairs {
+            let ([ia, ib], [ip, iq]) = (
+                pair.border.map(|i| i as usize),
+                pair.other.map(|i| i as usize),
+            );
+            let (a, b, p, q) = (x[ia], x[ib], x[ip], x[iq]);
+            let Some((s, t, n)) = closest(a, b - a, p, q - p) else {
+                continue;
+            };
+            let n = n * pair.side;
+            let gap = (a + (b - a) * s - p - (q - p) * t).dot(n);
+            // As for faces: apart, or turned away since the look.
+            if gap >= thickness || gap < -thickness {
+                continue;
+            }
+            let shares = [1.0 - s, s, 1.0 - t, t];
+            let w = [ia, ib, ip, iq].map(|i| inv_mass[i]);
+            let weight: f32 = (0..4).map(|k| w[k] * shares[k] * shares[k]).sum();
+            if !is_positive(weight) {
+                continue;
+            }
+            touching += 1;
+            let depth = (thickness - gap).min(0.5 * thickness);
+            let lambda = depth / weight;
+            // The border edge's side moves along n, the other edge's against it.
+            let signs = [1.0, 1.0, -1.0, -1.0];
+            for (k, i) in [ia, ib, ip, iq].into_iter().enumerate() {
+                x[i] += n * (signs[k] * w[k] * shares[k] * lambda);
+            }
+            let rel =
+                (v[ia] * shares[0] + v[ib] * shares[1]) - (v[ip] * shares[2] + v[iq] * shares[3]);
+            let closing = (-rel.dot(n)).max(0.0) / weight;
+            for (k, i) in [ia, ib, ip, iq].into_iter().enumerate() {
+                v[i] += n * (signs[k] * w[k] * shares[k] * closing);
+            }
+        }
         touching
     }
 
@@ -318,24 +444,16 @@ impl SelfContacts {
 }
 
 /// How far outside each edge of a triangle a particle is still taken, in
-/// barycentric terms (`[u, v, w]` may go that far below 0): `inside` metres
-/// beyond every edge, and `rim` more beyond the edges on the cloth's
-/// border (bit k of `border` for the edge facing corner k), over the
-/// altitude onto that edge. Interior edges need no rim: the triangle
-/// across takes the particle. `len` is `|e1 × e2|`, twice the area.
+/// barycentric terms (`[u, v, w]` may go that far below 0): `out` metres
+/// beyond every edge, over the altitude onto that edge. Where the cloth
+/// bends, the projections of a particle near the common edge may fall
+/// outside both triangles (a gap a particle slipped through in the `fold`
+/// scene); a rim closes it. `len` is `|e1 × e2|`, twice the area.
 #[inline]
-fn rim_slack(
-    (inside, rim, border): (f32, f32, u8),
-    (e1, e2): (Vector, Vector),
-    len: f32,
-) -> [f32; 3] {
+fn rim_slack(out: f32, (e1, e2): (Vector, Vector), len: f32) -> [f32; 3] {
     // The altitude onto an edge is `len / |edge|`; u belongs to corner a,
     // whose opposite edge is `e2 − e1`.
-    let edges = [(e2 - e1).length(), e2.length(), e1.length()];
-    std::array::from_fn(|k| {
-        let out = inside + if border & (1 << k) != 0 { rim } else { 0.0 };
-        out * edges[k] / len
-    })
+    [(e2 - e1).length(), e2.length(), e1.length()].map(|edge| out * edge / len)
 }
 
 /// The rim of a triangle (m): the thickness, but at most a quarter of its

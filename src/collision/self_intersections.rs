@@ -1,6 +1,7 @@
 //! How badly a cloth passes through itself: pairs of a particle and a
 //! triangle that are not neighbours in the rest mesh ([`MeshNeighbours`])
-//! and sit closer than half the thickness, inside the triangle; and pairs
+//! and sit closer than half the layers' thickness
+//! ([`Cloth::self_thickness`]), inside the triangle; and pairs
 //! of a triangle edge and a triangle without a common corner that cross.
 //! What every run reports as `self_intersections`.
 
@@ -17,7 +18,7 @@ pub fn self_intersections(cloth: &Cloth) -> usize {
     let topology = cloth.topology();
     let mut neighbours = MeshNeighbours::default();
     neighbours.update(topology, x.len());
-    let near = 0.5 * cloth.params.thickness;
+    let near = 0.5 * cloth.self_thickness();
     // Edges are found through their lower end, which lies within an edge's
     // length of any triangle the edge crosses.
     let longest = (0..x.len() as u32)

@@ -127,6 +127,15 @@ pub struct ClothDesc {
     /// friction between layers (off by default: it costs time).
     #[serde(default, skip_serializing_if = "is_false")]
     pub self_collision: bool,
+    /// Distance the cloth's layers keep, in metres (default: the scene's
+    /// thickness, but at most a quarter of the grid spacing; see
+    /// [`crate::cloth::Cloth::self_thickness`]).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::error::de::opt_positive"
+    )]
+    pub self_thickness: Option<f32>,
 }
 
 /// Where a cloth starts.
@@ -603,6 +612,7 @@ impl ClothDesc {
             material: MaterialDesc::default(),
             pins: PinsDesc::default(),
             self_collision: false,
+            self_thickness: None,
         }
     }
 }

@@ -166,6 +166,7 @@ impl Scene {
         cloth.params.thickness = desc.thickness;
         cloth.params.self_collision = c.self_collision;
         cloth.params.self_friction = desc.friction;
+        cloth.params.self_thickness = c.self_thickness;
         cloth.params.validate()?;
         desc.solver
             .validate()

@@ -195,14 +195,15 @@ impl ClothSolver {
             // the two disagree (a layer pressed onto a ball stays outside it).
             if cloth.params.self_collision {
                 let (selfc, topology) = (&mut ws.self_contacts, &*cloth.topology);
+                let thickness = cloth.self_thickness();
                 if selfc.due(substep) {
-                    selfc.find(&cloth.particles.x, topology, ctx.thickness, team);
+                    selfc.find(&cloth.particles.x, topology, thickness, team);
                 }
                 report.self_contacts += selfc.resolve(
                     &mut cloth.particles,
                     topology,
                     &SelfContactParams {
-                        thickness: ctx.thickness,
+                        thickness,
                         friction: cloth.params.self_friction,
                         h,
                     },
