@@ -17,6 +17,7 @@ mod edges;
 mod neighbours;
 mod obstacle;
 mod particle_pass;
+mod patches;
 mod response;
 mod self_contacts;
 mod self_intersections;

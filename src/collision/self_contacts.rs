@@ -25,6 +25,7 @@
 //! the sliding part. No velocity is added: the pass never pumps energy.
 
 use super::neighbours::MeshNeighbours;
+use super::patches::Patches;
 use super::spatial_hash::SpatialHash;
 use crate::cloth::{Particles, SpringKind, Topology};
 use crate::math::Vector;
@@ -59,6 +60,8 @@ struct EdgePair {
 pub struct SelfContacts {
     /// The particles by cell, at the last look.
     hash: SpatialHash,
+    /// The cloth's patches, and which need no look.
+    patches: Patches,
     /// Per block of triangles: the pairs it found at the last look.
     blocks: Vec<PairList>,
     neighbours: MeshNeighbours,
@@ -289,18 +292,19 @@ impl SelfContacts {
             .map(|s| springs.rest[s])
             .fold(0.0f32, f32::max);
         self.hash.build(x, longest.max(look.reach).max(1.0e-4));
+        self.patches.update(x, topology.grid, triangles, look.reach);
         let blocks = triangles.len().div_ceil(TRIANGLE_BLOCK);
         if self.blocks.len() < blocks {
             self.blocks.resize_with(blocks, PairList::default);
         }
-        let (hash, neighbours) = (&self.hash, &self.neighbours);
+        let (hash, neighbours, patches) = (&self.hash, &self.neighbours, &self.patches);
         let lists = Disjoint::new(&mut self.blocks[..blocks]);
         team.sum_count(blocks, |k| {
             // SAFETY: block `k` alone uses list `k`.
             let list = unsafe { &mut lists.range(k..k + 1)[0].0 };
             list.clear();
             let end = ((k + 1) * TRIANGLE_BLOCK).min(triangles.len());
-            for t in k * TRIANGLE_BLOCK..end {
+            for t in (k * TRIANGLE_BLOCK..end).filter(|&t| !patches.quiet_triangle(t)) {
                 look.triangle(t, (hash, neighbours), list);
             }
             0
@@ -310,8 +314,11 @@ impl SelfContacts {
         }
         self.edge_pairs.clear();
         let (neighbours, hash, edge_pairs) = (&self.neighbours, &self.hash, &mut self.edge_pairs);
+        let patches = &self.patches;
         for &border in neighbours.border_edges() {
-            look.border_edge(border, (hash, neighbours), edge_pairs);
+            if !border.iter().all(|&p| patches.quiet_particle(p as usize)) {
+                look.border_edge(border, (hash, neighbours), edge_pairs);
+            }
         }
     }
 
