@@ -22,9 +22,10 @@ pub(crate) struct MeshNeighbours {
     edges: Vec<u32>,
     /// The cloth's border edges (lower index first), ascending.
     border_edges: Vec<[u32; 2]>,
-    /// For a grid cloth: columns, and the rest spacing along a row and
-    /// along a column (m), from which rest distances follow.
-    grid: Option<(u32, f32, f32)>,
+    /// For a grid cloth: each particle's place in the rest shape (m, along
+    /// a row and along a column), from which rest distances follow; empty
+    /// off a grid.
+    rest: Vec<[f32; 2]>,
     /// What the lists were made from: the topology's address, particle,
     /// spring and triangle counts.
     made_for: Option<(usize, usize, usize, usize)>,
@@ -68,14 +69,20 @@ impl MeshNeighbours {
             .filter(|&(k, e)| all.get(k + 1) != Some(e) && (k == 0 || all[k - 1] != *e))
             .map(|(_, &(a, b))| [a, b])
             .collect();
-        self.grid = topology.grid.and_then(|g| {
+        let spacing = topology.grid.and_then(|g| {
             let rest = |a: usize, b: usize| {
                 (0..springs.len())
                     .find(|&s| (springs.a[s], springs.b[s]) == (a as u32, b as u32))
                     .map(|s| springs.rest[s])
             };
-            Some((g.cols as u32, rest(0, 1)?, rest(0, g.cols)?))
+            Some((g.cols, rest(0, 1)?, rest(0, g.cols)?))
         });
+        self.rest = match spacing {
+            Some((cols, dx, dy)) => (0..n)
+                .map(|p| [(p % cols) as f32 * dx, (p / cols) as f32 * dy])
+                .collect(),
+            None => Vec::new(),
+        };
         self.made_for = Some(key);
     }
 
@@ -98,18 +105,13 @@ impl MeshNeighbours {
     /// in the rest shape (none off a grid). Such a particle can only come
     /// within the thickness of the triangle through a fold tighter than
     /// about `radius / π`, which the bending springs resist.
-    pub fn sheet(&self, tri: [u32; 3], radius: f32) -> Sheet {
-        match self.grid {
-            Some((cols, dx, dy)) => Sheet {
-                cols,
-                corners: tri.map(|c| [c / cols, c % cols]),
-                radius: [1.0 / dx, 1.0 / dy].map(|s| if s.is_finite() { s * radius } else { 0.0 }),
-            },
-            None => Sheet {
-                cols: 1,
-                corners: [[0; 2]; 3],
-                radius: [0.0; 2],
-            },
+    pub fn sheet(&self, tri: [u32; 3], radius: f32) -> Sheet<'_> {
+        let at = |c: u32| self.rest.get(c as usize).copied().unwrap_or([f32::NAN; 2]);
+        Sheet {
+            rest: &self.rest,
+            corners: tri.map(at),
+            // Off a grid `rest` is empty and nothing is held.
+            radius2: radius * radius,
         }
     }
 
@@ -184,24 +186,25 @@ mod tests {
 /// The particles near a triangle in the rest shape of a grid cloth
 /// ([`MeshNeighbours::sheet`]).
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Sheet {
-    cols: u32,
-    /// Row and column of each corner.
-    corners: [[u32; 2]; 3],
-    /// The radius in columns and in rows.
-    radius: [f32; 2],
+pub(crate) struct Sheet<'a> {
+    /// Every particle's place in the rest shape.
+    rest: &'a [[f32; 2]],
+    /// The triangle's corners' places in the rest shape.
+    corners: [[f32; 2]; 3],
+    /// The radius squared, in m².
+    radius2: f32,
 }
 
-impl Sheet {
+impl Sheet<'_> {
     /// True when particle `p` lies within the radius of a corner.
     #[inline]
     pub fn holds(&self, p: u32) -> bool {
-        let (r, c) = (p / self.cols, p % self.cols);
-        let [rc, rr] = self.radius;
-        self.corners.iter().any(|&[cr, cc]| {
-            // In units of the radius: (Δcol / radius_cols)² + (Δrow / radius_rows)².
-            let (u, v) = (c.abs_diff(cc) as f32, r.abs_diff(cr) as f32);
-            u * u * rr * rr + v * v * rc * rc < rc * rc * rr * rr
+        let Some(&[u, v]) = self.rest.get(p as usize) else {
+            return false;
+        };
+        self.corners.iter().any(|&[cu, cv]| {
+            let (du, dv) = (u - cu, v - cv);
+            du * du + dv * dv < self.radius2
         })
     }
 }

@@ -165,6 +165,7 @@ impl Look<'_> {
         let (lo, hi) = (a.min(b) - pad, a.max(b) + pad);
         let sheet = neighbours.sheet([ia, ib, ib], self.reach + 2.0 * length);
         let borders = neighbours.border_edges();
+        let first = out.len();
         hash.for_each_in(lo, hi, |p| {
             if sheet.holds(p) {
                 return;
@@ -191,6 +192,8 @@ impl Look<'_> {
                 }
             }
         });
+        // In edge order, whatever the hash's layout.
+        out[first..].sort_unstable_by_key(|e| e.other);
     }
 }
 
@@ -284,14 +287,17 @@ impl SelfContacts {
             reach: thickness + self.margin,
             margin: self.margin,
         };
-        // Cells about a triangle wide: a triangle's box meets a few.
+        // Cells about twice a triangle's width or the reach: a triangle's
+        // box meets a few (drape N = 64: 8% faster a frame than cells of
+        // one width, 6% than three).
         let springs = &topology.springs;
         let longest = springs
             .range(SpringKind::Stretch)
             .chain(springs.range(SpringKind::Shear))
             .map(|s| springs.rest[s])
             .fold(0.0f32, f32::max);
-        self.hash.build(x, longest.max(look.reach).max(1.0e-4));
+        self.hash
+            .build(x, 2.0 * longest.max(look.reach).max(1.0e-4));
         self.patches.update(x, topology.grid, triangles, look.reach);
         let blocks = triangles.len().div_ceil(TRIANGLE_BLOCK);
         if self.blocks.len() < blocks {
