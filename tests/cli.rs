@@ -18,6 +18,8 @@ fn run_json_prints_exactly_one_object_with_every_metric() {
         "max_penetration",
         "max_penetration_any_frame",
         "max_stretch",
+        "self_intersections",
+        "self_intersections_any_frame",
         "min_y",
         "centroid",
         "finite",
@@ -97,6 +99,10 @@ fn bad_arguments_get_one_line_and_status_2() {
         (vec!["run", "pins", "--variant", "sideways"], "center-row"),
         (vec!["run", "drape", "--variant", "center"], "no variants"),
         (vec!["run", "drape", "--friction", "-0.5"], ">= 0"),
+        (
+            vec!["run", "fold", "--self-collision=maybe"],
+            "neither on nor off",
+        ),
         (vec!["fly"], "fly"),
     ] {
         let out = cloth3d(&args);
@@ -444,4 +450,51 @@ fn compare_honours_the_solver_flags() {
         "{free} vs {capped}"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn self_collision_is_the_scenes_own_and_the_flag_turns_it_either_way() {
+    // A short fold at a coarse grid: its halves meet under the bar by then.
+    let run = |extra: &[&str]| {
+        let mut args = vec!["run", "fold", "--n", "24", "--frames", "40", "--json"];
+        args.extend_from_slice(extra);
+        let v: serde_json::Value = serde_json::from_str(cloth3d_ok(&args).trim()).unwrap();
+        v
+    };
+    let on = run(&[]);
+    let off = run(&["--self-collision=off"]);
+    assert_eq!(on["self_intersections"], 0, "{on}");
+    assert!(
+        off["self_intersections_any_frame"].as_u64().unwrap() > 20,
+        "{off}"
+    );
+    // The flag alone turns it on for a scene without it: the drape's skirt
+    // folds less through itself.
+    let drape = |extra: &[&str]| {
+        let mut args = vec!["run", "drape", "--n", "32", "--frames", "90", "--json"];
+        args.extend_from_slice(extra);
+        let v: serde_json::Value = serde_json::from_str(cloth3d_ok(&args).trim()).unwrap();
+        v["self_intersections_any_frame"].as_u64().unwrap()
+    };
+    let (with, without) = (drape(&["--self-collision"]), drape(&[]));
+    assert!(
+        2 * with < without,
+        "drape: at most {with} self-intersections a frame with it, {without} without"
+    );
+    // bench takes both in one run.
+    let rows = quick_bench(&[
+        "--n",
+        "16",
+        "--integrator",
+        "xpbd",
+        "--self-collision",
+        "off",
+        "--self-collision",
+        "on",
+    ]);
+    let flags: Vec<bool> = rows
+        .iter()
+        .map(|r| r["self_collision"].as_bool().unwrap())
+        .collect();
+    assert_eq!(flags, [false, true], "{rows:?}");
 }

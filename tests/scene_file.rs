@@ -184,6 +184,23 @@ fn a_good_file_parses() {
 }
 
 #[test]
+fn a_file_turns_self_collision_on_with_its_thickness() {
+    let on = GOOD.replace(
+        "        pins: (preset: TwoCorners, cells: [(7, 7)]),",
+        "        pins: (preset: TwoCorners, cells: [(7, 7)]),\n        self_collision: true,\n        self_thickness: Some(0.003),",
+    );
+    let scene = Scene::from_desc(file::from_ron(&on).unwrap()).unwrap();
+    assert!(scene.cloth.params.self_collision);
+    assert_eq!(scene.cloth.self_thickness(), 0.003);
+    // Friction between layers is the scene's.
+    assert_eq!(scene.cloth.params.self_friction, 0.5);
+    let off = Scene::from_desc(file::from_ron(GOOD).unwrap()).unwrap();
+    assert!(!off.cloth.params.self_collision);
+    let err = error_of(&on.replace("Some(0.003)", "Some(-0.003)"));
+    assert!(err.contains("cloth.self_thickness"), "{err}");
+}
+
+#[test]
 fn a_bad_file_names_the_line_and_the_field() {
     let cases: [(&str, &str, usize, &str); 8] = [
         (
