@@ -209,7 +209,7 @@ pub fn camera_for(scene: &Scene) -> OrbitCamera3d {
         SceneKind::Curtain => (Vec3::new(1.5, 1.2, 1.3), Vec3::new(0.0, 1.0, 0.1)),
         SceneKind::Hammock => (Vec3::new(0.8, 0.7, 1.05), Vec3::new(0.0, 0.3, 0.0)),
         // Nearly along the bar, to see the layers' profile.
-        SceneKind::Fold => (Vec3::new(0.9, 0.75, 1.5), Vec3::new(0.05, 0.18, 0.0)),
+        SceneKind::Fold => (Vec3::new(0.55, 0.5, 1.45), Vec3::new(0.05, 0.2, 0.0)),
     };
     OrbitCamera3d::new(eye, at)
 }
