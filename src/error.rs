@@ -116,6 +116,23 @@ pub enum ClothError {
         /// Which body: `obstacle 3`, or a rapier collider's handle.
         body: String,
     },
+    /// Self-collision is on but the substeps are too long: layers would
+    /// pass through each other between the passes that keep them apart
+    /// (at one step a frame a folding cloth crosses itself hundreds of
+    /// times). Nothing was stepped.
+    #[error("self-collision needs substeps of at most {max_substep_ms:.2} ms, but {integrator} takes {substeps} a frame of {dt:.4} s; use --substeps {needed} or more, or xpbd or symplectic-euler with automatic substeps")]
+    SelfCollisionNeedsSubsteps {
+        /// Name of the integrator.
+        integrator: &'static str,
+        /// The frame step, in seconds.
+        dt: f32,
+        /// Substeps it would take.
+        substeps: u32,
+        /// Substeps it needs at least.
+        needed: u32,
+        /// The longest substep self-collision allows, in milliseconds.
+        max_substep_ms: f32,
+    },
     /// A name (scene, integrator, material, variant) is not known.
     #[error("unknown {what} '{name}': valid choices are {valid}")]
     UnknownName {

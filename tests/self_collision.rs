@@ -219,3 +219,36 @@ fn the_layer_thickness_follows_the_spacing_unless_set() {
         .unwrap_err();
     assert!(err.to_string().contains("self thickness"), "{err}");
 }
+
+/// At one step a frame the layers would cross between passes: the large-step
+/// integrators refuse self-collision unless given enough substeps, and say
+/// how many; with them they keep the fold's layers apart.
+#[test]
+fn large_step_integrators_refuse_self_collision_without_substeps() {
+    for integrator in [Integrator::FastMassSpring, Integrator::ImplicitEuler] {
+        let options = |substeps| SceneOptions {
+            integrator: Some(integrator),
+            substeps,
+            ..Default::default()
+        };
+        let mut scene = Scene::build(SceneKind::Fold, &options(None)).unwrap();
+        let before = bits(&scene.cloth);
+        let err = scene.step_frame().unwrap_err();
+        assert!(
+            matches!(
+                err,
+                ClothError::SelfCollisionNeedsSubsteps { needed: 16, .. }
+            ),
+            "{integrator}: {err}"
+        );
+        assert!(err.to_string().contains("--substeps 16"), "{err}");
+        assert_eq!(
+            bits(&scene.cloth),
+            before,
+            "{integrator}: a refused step moved the cloth"
+        );
+        let mut scene = Scene::build(SceneKind::Fold, &options(Some(Substeps::Fixed(16)))).unwrap();
+        let run = cloth3d::scenes::run(&mut scene, 60).unwrap();
+        assert_eq!(run.self_intersections_any_frame, 0, "{integrator}: {run:?}");
+    }
+}

@@ -361,10 +361,10 @@ impl SelfContacts {
             if d >= thickness {
                 continue;
             }
-            // Deeper than the thickness on the other side: not a crossing
-            // since the last look (that would take tens of m/s), but a pair
-            // the cloth has turned away from (a fold, a swing).
-            if d < -thickness {
+            // Further on the other side than particles can have moved since
+            // the look (the margin): not a crossing but a pair the cloth has
+            // turned away from (a fold, a swing).
+            if d < -(thickness + self.margin) {
                 continue;
             }
             let bary = barycentric(xp - n * d - a, e1, e2);
@@ -423,7 +423,7 @@ impl SelfContacts {
             let n = n * pair.side;
             let gap = (a + (b - a) * s - p - (q - p) * t).dot(n);
             // As for faces: apart, or turned away since the look.
-            if gap >= thickness || gap < -thickness {
+            if gap >= thickness || gap < -(thickness + self.margin) {
                 continue;
             }
             let shares = [1.0 - s, s, 1.0 - t, t];

@@ -34,6 +34,7 @@ pub use cloth_solver::ClothSolver;
 pub use integrator::Integrator;
 pub use preconditioner::Preconditioner;
 pub use report::{SolverCounters, StepReport, MAX_DISTANCE, MAX_SPEED, MAX_STRAIN};
+pub use schedule::MAX_SELF_SUBSTEP;
 pub use settings::SolverSettings;
 pub use stability::{stable_substep, stable_substeps, stiffness_bounds};
 pub use state::SolverState;
