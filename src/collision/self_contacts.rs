@@ -315,9 +315,11 @@ impl SelfContacts {
             }
             0
         });
-        for list in &self.blocks[..blocks] {
+        for list in &mut self.blocks[..blocks] {
             self.pairs.extend_from_slice(&list.0);
+            headroom(&mut list.0);
         }
+        headroom(&mut self.pairs);
         self.edge_pairs.clear();
         let (neighbours, hash, edge_pairs) = (&self.neighbours, &self.hash, &mut self.edge_pairs);
         let patches = &self.patches;
@@ -326,6 +328,7 @@ impl SelfContacts {
                 look.border_edge(border, (hash, neighbours), edge_pairs);
             }
         }
+        headroom(&mut self.edge_pairs);
     }
 
     /// One pass over the pairs (module docs); returns how many were
@@ -488,6 +491,15 @@ fn clamped([u, v, w]: [f32; 3]) -> [f32; 3] {
     let [u, v, w] = [u.max(0.0), v.max(0.0), w.max(0.0)];
     let sum = u + v + w;
     [u / sum, v / sum, w / sum]
+}
+
+/// Makes room for twice the list's length, so that a step whose pairs
+/// grow by less than that allocates nothing (a warmed-up step allocates
+/// only when the contacts more than double).
+fn headroom<T>(list: &mut Vec<T>) {
+    if list.capacity() < 2 * list.len() {
+        list.reserve(list.len());
+    }
 }
 
 /// True for a number > 0 (false for NaN).
