@@ -80,11 +80,20 @@ impl ClothSolver {
         &self.state
     }
 
-    /// The number of substeps a frame step of `dt` seconds takes on `cloth`.
+    /// The number of substeps a frame step of `dt` seconds takes on `cloth`:
+    /// automatic ones are at least as many as self-collision needs, when the
+    /// cloth has it ([`super::MAX_SELF_SUBSTEP`]).
     pub fn substeps_for(&self, cloth: &Cloth, dt: f32) -> u32 {
         match self.settings.substeps {
             Substeps::Fixed(k) => k.max(1),
-            Substeps::Auto => stable_substeps(cloth, self.settings.integrator, dt),
+            Substeps::Auto => {
+                let stable = stable_substeps(cloth, self.settings.integrator, dt);
+                if cloth.params.self_collision {
+                    stable.max(self_collision_substeps(dt))
+                } else {
+                    stable
+                }
+            }
         }
     }
 
@@ -101,5 +110,15 @@ impl ClothSolver {
             factorizations: self.workspace.fms.factorizations,
             refactorizations: self.workspace.fms.refactorizations,
         }
+    }
+}
+
+/// The fewest substeps self-collision takes in a frame of `dt` seconds.
+pub(crate) fn self_collision_substeps(dt: f32) -> u32 {
+    let k = (dt / super::MAX_SELF_SUBSTEP).ceil();
+    if k.is_finite() {
+        k.clamp(1.0, 1.0e6) as u32
+    } else {
+        1
     }
 }

@@ -4,11 +4,12 @@
 //! validate → substeps k, h = dt / k → back up → obstacle bounds over the step
 //!     → candidates per particle → a team of threads for the substeps
 //! per substep:  obstacle motion → contact detection (solvers that solve
-//!               contacts) → integrate → stretch limit (solvers that do not
-//!               hold it in their own substep) → self-collision (cloths
-//!               that have it: a fresh look every few substeps, a pass
-//!               every substep) → resolve contacts (with the friction
-//!               policy the integrator handed back)
+//!               contacts) → integrate → self-collision (cloths that have
+//!               it: a fresh look every few substeps, a pass every
+//!               substep) → stretch limit (solvers that do not hold it in
+//!               their own substep, and every solver with self-collision)
+//!               → resolve contacts (with the friction policy the
+//!               integrator handed back)
 //! divergence check → roll back and report, or commit the time
 //! ```
 //!
@@ -68,7 +69,7 @@ impl ClothSolver {
                 integrator: integrator.name(),
                 dt,
                 substeps: k,
-                needed: (dt / MAX_SELF_SUBSTEP).ceil() as u32,
+                needed: super::cloth_solver::self_collision_substeps(dt),
                 max_substep_ms: 1000.0 * MAX_SELF_SUBSTEP,
             });
         }
@@ -184,24 +185,10 @@ impl ClothSolver {
                 }
             };
             report.iterations += outcome.iterations;
-            // The stretch limit, for the integrators that do not hold it in
-            // their own substep: before the contacts, so that the contacts
-            // win where the two disagree (a particle pulled towards a pin
-            // behind a ball stays outside the ball); velocities lose what
-            // still stretches a limited spring (strain_limit.rs says why not
-            // the move over the substep).
-            if !self.settings.integrator.limits_stretch_itself() {
-                let p = &mut cloth.particles;
-                limit_stretch(
-                    &cloth.topology.springs,
-                    &p.inv_mass,
-                    &mut p.x,
-                    Some(&mut p.v),
-                    cloth.material.stretch_limit_factor(),
-                );
-            }
-            // Self-collision: before the obstacles, so that they win where
-            // the two disagree (a layer pressed onto a ball stays outside it).
+            // Self-collision: before the stretch limit (a layer pushed off
+            // another must not stretch the cloth past it) and the obstacles
+            // (they win where the two disagree: a layer pressed onto a ball
+            // stays outside it).
             if cloth.params.self_collision {
                 let (selfc, topology) = (&mut ws.self_contacts, &*cloth.topology);
                 let thickness = cloth.self_thickness();
@@ -216,6 +203,23 @@ impl ClothSolver {
                         friction: cloth.params.self_friction,
                         h,
                     },
+                );
+            }
+            // The stretch limit, for the integrators that do not hold it in
+            // their own substep (and for all after self-collision, which
+            // may push a layer past it): before the contacts, so that the contacts
+            // win where the two disagree (a particle pulled towards a pin
+            // behind a ball stays outside the ball); velocities lose what
+            // still stretches a limited spring (strain_limit.rs says why not
+            // the move over the substep).
+            if !self.settings.integrator.limits_stretch_itself() || cloth.params.self_collision {
+                let p = &mut cloth.particles;
+                limit_stretch(
+                    &cloth.topology.springs,
+                    &p.inv_mass,
+                    &mut p.x,
+                    Some(&mut p.v),
+                    cloth.material.stretch_limit_factor(),
                 );
             }
             // Resolve contacts, by the friction policy the integrator handed back.
