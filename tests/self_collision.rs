@@ -252,3 +252,23 @@ fn large_step_integrators_refuse_self_collision_without_substeps() {
         assert_eq!(run.self_intersections_any_frame, 0, "{integrator}: {run:?}");
     }
 }
+
+/// Automatic substeps rise to what self-collision needs: a coarse fold
+/// (10 × 10, where xpbd's own choice is 11 substeps) steps with 16, and so
+/// does fast mass-spring asked for automatic substeps.
+#[test]
+fn automatic_substeps_rise_to_what_self_collision_needs() {
+    for (integrator, own) in [(Integrator::Xpbd, 11), (Integrator::FastMassSpring, 1)] {
+        let options = |self_collision| SceneOptions {
+            n: Some(10),
+            integrator: Some(integrator),
+            substeps: Some(Substeps::Auto),
+            self_collision: Some(self_collision),
+            ..Default::default()
+        };
+        let mut off = Scene::build(SceneKind::Fold, &options(false)).unwrap();
+        assert_eq!(off.step_frame().unwrap().substeps, own, "{integrator}");
+        let mut on = Scene::build(SceneKind::Fold, &options(true)).unwrap();
+        assert_eq!(on.step_frame().unwrap().substeps, 16, "{integrator}");
+    }
+}
