@@ -5,7 +5,7 @@
 //! that spares every particle within two cells; the rest of the cloth can
 //! only come near through a fold. Also the triangles' edges, once each.
 
-use crate::cloth::Topology;
+use crate::cloth::{SpringKind, Topology};
 
 /// Flat adjacency lists of a topology (compressed rows, sorted).
 #[derive(Debug, Default, Clone)]
@@ -20,6 +20,9 @@ pub(crate) struct MeshNeighbours {
     edge_start: Vec<u32>,
     /// Far ends of triangle edges, ascending per particle.
     edges: Vec<u32>,
+    /// The longest stretch or shear spring's rest length (m): about a
+    /// triangle's longest edge.
+    longest: f32,
     /// The cloth's border edges (lower index first), ascending.
     border_edges: Vec<[u32; 2]>,
     /// For a grid cloth: each particle's place in the rest shape (m, along
@@ -83,6 +86,11 @@ impl MeshNeighbours {
                 .collect(),
             None => Vec::new(),
         };
+        self.longest = springs
+            .range(SpringKind::Stretch)
+            .chain(springs.range(SpringKind::Shear))
+            .map(|s| springs.rest[s])
+            .fold(0.0f32, f32::max);
         self.made_for = Some(key);
     }
 
@@ -93,6 +101,11 @@ impl MeshNeighbours {
         }
         let joined = self.joined_to(p);
         tri.iter().any(|c| joined.binary_search(c).is_ok())
+    }
+
+    /// The longest stretch or shear spring's rest length, in metres.
+    pub fn longest(&self) -> f32 {
+        self.longest
     }
 
     /// The cloth's border edges: those of one triangle only.

@@ -27,7 +27,7 @@
 use super::neighbours::MeshNeighbours;
 use super::patches::Patches;
 use super::spatial_hash::SpatialHash;
-use crate::cloth::{Particles, SpringKind, Topology};
+use crate::cloth::{Particles, Topology};
 use crate::math::Vector;
 use crate::parallel::{Disjoint, Team};
 
@@ -290,12 +290,7 @@ impl SelfContacts {
         // Cells about twice a triangle's width or the reach: a triangle's
         // box meets a few (drape N = 64: 8% faster a frame than cells of
         // one width, 6% than three).
-        let springs = &topology.springs;
-        let longest = springs
-            .range(SpringKind::Stretch)
-            .chain(springs.range(SpringKind::Shear))
-            .map(|s| springs.rest[s])
-            .fold(0.0f32, f32::max);
+        let longest = self.neighbours.longest();
         self.hash
             .build(x, 2.0 * longest.max(look.reach).max(1.0e-4));
         self.patches.update(x, topology.grid, triangles, look.reach);

@@ -129,6 +129,8 @@ impl ClothSolver {
     ) -> Result<StepReport, ClothError> {
         let h = dt / k as f32;
         let edges = self.settings.edge_collisions;
+        // Once a step: it reads every stretch spring.
+        let layer = cloth.self_thickness();
         let ws = &mut self.workspace;
         let mut report = StepReport {
             substeps: k,
@@ -191,7 +193,7 @@ impl ClothSolver {
             // stays outside it).
             if cloth.params.self_collision {
                 let (selfc, topology) = (&mut ws.self_contacts, &*cloth.topology);
-                let thickness = cloth.self_thickness();
+                let thickness = layer;
                 if selfc.due(substep) {
                     selfc.find(&cloth.particles.x, topology, thickness, team);
                 }
