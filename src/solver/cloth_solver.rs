@@ -10,7 +10,7 @@ use super::report::SolverCounters;
 use super::settings::SolverSettings;
 use super::stability::stable_substeps;
 use super::state::SolverState;
-use super::substeps::Substeps;
+use super::substeps::{self_collision_substeps, Substeps};
 use super::workspace::Workspace;
 use crate::cloth::Cloth;
 use crate::collision::ObstacleImpulse;
@@ -110,15 +110,5 @@ impl ClothSolver {
             factorizations: self.workspace.fms.factorizations,
             refactorizations: self.workspace.fms.refactorizations,
         }
-    }
-}
-
-/// The fewest substeps self-collision takes in a frame of `dt` seconds.
-pub(crate) fn self_collision_substeps(dt: f32) -> u32 {
-    let k = (dt / super::MAX_SELF_SUBSTEP).ceil();
-    if k.is_finite() {
-        k.clamp(1.0, 1.0e6) as u32
-    } else {
-        1
     }
 }

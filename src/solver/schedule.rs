@@ -22,6 +22,7 @@ use super::report::{StepReport, MAX_DISTANCE, MAX_SPEED, MAX_STRAIN};
 use super::stability::stable_substeps;
 use super::strain_limit::limit_stretch;
 use super::substep::Substep;
+use super::substeps::{self_collision_substeps, MAX_SELF_SUBSTEP};
 use crate::cloth::{Cloth, Particles, SpringKind};
 use crate::collision::{Obstacle, ResolveOptions, SelfContactParams};
 use crate::context::StepContext;
@@ -69,7 +70,7 @@ impl ClothSolver {
                 integrator: integrator.name(),
                 dt,
                 substeps: k,
-                needed: super::cloth_solver::self_collision_substeps(dt),
+                needed: self_collision_substeps(dt),
                 max_substep_ms: 1000.0 * MAX_SELF_SUBSTEP,
             });
         }
@@ -240,12 +241,6 @@ impl ClothSolver {
         Ok(report)
     }
 }
-
-/// The longest substep (s) self-collision takes: the fold scene's layers
-/// cross at longer ones (fast mass-spring: 700 self-intersections at 4
-/// substeps of a 1/60 s frame, 22 at 8, none at 16; implicit Euler none
-/// from 8); xpbd and symplectic Euler take 50–70 on their own.
-pub const MAX_SELF_SUBSTEP: f32 = 1.0 / 960.0;
 
 /// Particles from which a step's loops are shared among threads.
 const TEAM_MIN_PARTICLES: usize = 2048;
