@@ -1,4 +1,5 @@
-//! Self-collision: particles kept a thickness away from the triangles of
+//! Self-collision: particles kept a layer's thickness
+//! ([`crate::cloth::Cloth::self_thickness`]) away from the triangles of
 //! their own cloth that are not their neighbours in the rest mesh
 //! ([`MeshNeighbours`]), with Coulomb friction between the layers.
 //!
@@ -7,22 +8,28 @@
 //! particles within reach of it, `thickness + margin`, where the margin
 //! covers how far particles move relative to each other until the next
 //! look. A look costs a pass over the triangles, so it is taken every few
-//! substeps, as many as keep that relative motion under the thickness
-//! (every substep only for a cloth in violent motion, once a step at rest).
-//! Each pair keeps the side of the triangle the particle was on when found.
+//! substeps, as many as keep that relative motion under the collision
+//! thickness (every substep only for a cloth in violent motion, once a
+//! step at rest); the triangles of quiet patches ([`Patches`]: a bent
+//! sheet that cannot touch itself) are skipped. Each pair keeps the side
+//! of the triangle the particle was on when found. The cloth's border
+//! edges are also paired with the other edges near them, so that two
+//! borders cannot slip past each other.
 //!
 //! A substep's pass, in pair order (Gauss–Seidel, one thread, the same
 //! bits on any number): for a particle `p` whose projection falls inside
-//! triangle `abc`, or just outside an edge on the cloth's border, where
-//! layers would otherwise slip past each other (barycentrics `u, v, w`,
-//! clamped to the triangle), closer than the thickness `t`
-//! along the side's normal `n`, the constraint `C = (x_p − x_a)·n − t ≥ 0`
-//! moves `p` by `w_p s n` and each corner `i` by `−w_i b_i s n`, with
-//! `s = −C / (w_p + Σ w_i b_i²)` (the inverse masses weigh who moves).
-//! Velocities then lose the part of the relative velocity that closes the
-//! gap, and Coulomb friction (coefficient μ) takes up to μ times the normal
-//! velocity change (that change and the correction over the substep) from
-//! the sliding part. No velocity is added: the pass never pumps energy.
+//! triangle `abc` or within a rim outside its edges (where the cloth bends,
+//! a particle near a common edge may project outside both triangles;
+//! barycentrics `u, v, w`, clamped to the triangle), closer than the
+//! thickness `t` along the side's normal `n`, the constraint
+//! `C = (x_p − x_a)·n − t ≥ 0` moves `p` by `w_p s n` and each corner `i` by
+//! `−w_i b_i s n`, with `s = −C / (w_p + Σ w_i b_i²)` (the inverse masses
+//! weigh who moves; at most half the thickness a pass). Velocities then
+//! lose the part of the relative velocity that closes the gap, and Coulomb
+//! friction (coefficient μ) takes up to μ times the normal velocity change
+//! (that change and the correction over the substep) from the sliding
+//! part. No velocity is added: the pass never pumps energy. Edge pairs
+//! are kept apart the same way at their closest points.
 
 use super::neighbours::MeshNeighbours;
 use super::patches::Patches;
