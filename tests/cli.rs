@@ -192,6 +192,16 @@ fn compare_on_the_hammock_says_which_integrators_refuse_its_boxes() {
 }
 
 #[test]
+fn compare_on_the_fold_says_which_integrators_refuse_self_collision() {
+    let plot = std::env::temp_dir().join(format!("cloth3d-refuse-fold-{}.png", std::process::id()));
+    let args = ["compare", "fold", "--n", "8", "--frames", "3"];
+    let table = cloth3d_ok(&[&args[..], &["--plot", plot.to_str().unwrap()]].concat());
+    assert_eq!(table.matches("refused:").count(), 2, "{table}");
+    assert!(table.contains("--substeps 16"), "{table}");
+    let _ = std::fs::remove_file(&plot);
+}
+
+#[test]
 fn export_obj_writes_one_mesh_per_frame_that_parses_back() {
     let dir = std::env::temp_dir().join(format!("cloth3d-obj-{}", std::process::id()));
     let stdout = cloth3d_ok(&[

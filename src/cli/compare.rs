@@ -85,7 +85,10 @@ pub fn compare_desc(desc: &SceneDesc, frames: u32) -> Result<Vec<Comparison>, Sc
                     row.stable = false;
                     break;
                 }
-                Err(e @ ClothError::CannotCarryBodies { .. }) => {
+                Err(
+                    e @ (ClothError::CannotCarryBodies { .. }
+                    | ClothError::SelfCollisionNeedsSubsteps { .. }),
+                ) => {
                     row.refused = Some(e.to_string());
                     break;
                 }
