@@ -454,11 +454,6 @@ impl SelfContacts {
         }
         touching
     }
-
-    /// Pairs found by the last look.
-    pub fn pair_count(&self) -> usize {
-        self.pairs.len()
-    }
 }
 
 /// How far outside each edge of a triangle a particle is still taken, in
