@@ -9,9 +9,10 @@
 //! cargo run --release --features viewer --example showcase -- --scene examples/scenes/capsule_drape.ron
 //! ```
 //!
-//! Keys: 1–7 scene · I integrator · M material · P pin preset · Space pause ·
+//! Keys: 1–8 scene · I integrator · M material · P pin preset · Space pause ·
 //! N one frame · R reset · W wind · T spring trace · click a particle to
-//! select it · X pin/unpin it · Ctrl+drag to pull it · H help.
+//! select it · X pin/unpin it · Ctrl+drag to pull it · Shift+drag to tear
+//! the cloth along the cursor's path · H help.
 
 use cloth3d::cli::args::SceneArgs;
 use cloth3d::prelude::*;
@@ -94,6 +95,9 @@ struct Showcase {
     /// The pin preset chosen with P on a scene without variants.
     pins: Option<PinPreset>,
     dragging: Option<(usize, bool)>,
+    /// Shift+drag: tearing along the cursor's path; the last particle the
+    /// cursor passed over, where it was, and whether it was torn.
+    ripping: Option<Option<(usize, Vector, bool)>>,
     wind_on: bool,
     help: bool,
     message: String,
@@ -128,6 +132,7 @@ impl Showcase {
                 self.selected = None;
                 self.pins = None;
                 self.dragging = None;
+                self.ripping = None;
                 self.wind_on = !self.scene.cloth.params.wind.is_calm();
                 self.message.clear();
             }
@@ -165,6 +170,7 @@ async fn interactive(source: String, options: SceneOptions) {
         selected: None,
         pins: None,
         dragging: None,
+        ripping: None,
         help: true,
         message: String::new(),
         step_ms: 0.0,
@@ -193,7 +199,10 @@ async fn interactive(source: String, options: SceneOptions) {
                 {
                     let (origin, dir) = app.camera.unproject(cursor, size);
                     let picked = viewer::pick(&app.scene.cloth, origin, dir, 0.03);
-                    if let Some(i) = picked {
+                    if mods.contains(Modifiers::Shift) {
+                        app.ripping = Some(None);
+                        event.inhibited = true;
+                    } else if let Some(i) = picked {
                         app.selected = Some(i);
                         if mods.contains(Modifiers::Control) {
                             let was_pinned = app.scene.cloth.is_pinned(i);
@@ -204,6 +213,9 @@ async fn interactive(source: String, options: SceneOptions) {
                     }
                 }
                 WindowEvent::MouseButton(MouseButton::Button1, Action::Release, _) => {
+                    if app.ripping.take().is_some() {
+                        event.inhibited = true;
+                    }
                     if let Some((i, was_pinned)) = app.dragging.take() {
                         if !was_pinned {
                             let _ = app.scene.cloth.unpin(i);
@@ -221,6 +233,7 @@ async fn interactive(source: String, options: SceneOptions) {
                         Key::Key5,
                         Key::Key6,
                         Key::Key7,
+                        Key::Key8,
                     ]
                     .iter()
                     .position(|k| *k == key);
@@ -311,6 +324,33 @@ async fn interactive(source: String, options: SceneOptions) {
             }
         }
 
+        // Tearing by hand: each particle the cursor passes over splits
+        // across the cursor's path (seen from the camera), so the cloth opens
+        // along it.
+        if let Some(last) = app.ripping {
+            let (origin, dir) = app.camera.unproject(cursor, size);
+            if let Some(i) = viewer::pick(&app.scene.cloth, origin, dir, 0.03) {
+                let p = app.scene.cloth.positions()[i];
+                match last {
+                    Some((j, q, torn)) if j != i => {
+                        let normal = (p - q).cross(dir);
+                        let first = (!torn).then_some(j);
+                        for k in first.into_iter().chain([i]) {
+                            if let Ok(Some(split)) = app.scene.cloth.split_particle(k, normal) {
+                                app.message = format!(
+                                    "tore particle {} (new particle {})",
+                                    split.particle, split.new_particle
+                                );
+                            }
+                        }
+                        app.ripping = Some(Some((i, p, true)));
+                    }
+                    None => app.ripping = Some(Some((i, p, false))),
+                    _ => {}
+                }
+            }
+        }
+
         if !app.paused || step_once {
             let start = std::time::Instant::now();
             match app.scene.step_frame() {
@@ -377,7 +417,7 @@ fn overlay_text(window: &mut Window, font: &std::sync::Arc<Font>, app: &Showcase
         );
     }
     if app.help {
-        let help = "1-7 scene  I integrator  M material  P pins  Space pause  N step  R reset  W wind  T trace  click select  X pin  Ctrl+drag pull  H help";
+        let help = "1-8 scene  I integrator  M material  P pins  Space pause  N step  R reset  W wind  T trace  click select  X pin  Ctrl+drag pull  Shift+drag tear  H help";
         let y = window.size()[1] as f32 * window.scale_factor() as f32 - 30.0;
         window.draw_text(
             help,

@@ -66,8 +66,24 @@ impl Animation {
         }
     }
 
-    /// Records the cloth as it is now as the next frame.
+    /// Records the cloth as it is now as the next frame. When the cloth has
+    /// torn since the last frame, the frames before gain its new particles,
+    /// each where the particle it split from was, so every frame keeps the
+    /// same vertices.
     pub fn push(&mut self, cloth: &Cloth) {
+        let n = cloth.particle_count();
+        let frames = self.positions.iter_mut().zip(&mut self.normals);
+        // A frame of another particle count that no split explains (another
+        // cloth's) stays as it is, and `to_glb` leaves it out.
+        for (positions, normals) in frames.filter(|(p, _)| p.len() < n) {
+            for &[from, new] in cloth.topology().splits() {
+                let (from, new) = (from as usize, new as usize);
+                if new == positions.len() && from < new {
+                    positions.push(positions[from]);
+                    normals.push(normals[from]);
+                }
+            }
+        }
         self.positions.push(cloth.positions().to_vec());
         self.normals.push(cloth.vertex_normals());
     }

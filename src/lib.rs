@@ -58,15 +58,15 @@ pub use solver::{ClothSolver, Integrator, Preconditioner, SolverSettings, StepRe
 /// Everything a typical user needs, in one import.
 pub mod prelude {
     pub use crate::cloth::{
-        Cloth, ClothBuilder, Energy, Material, PhysicsParams, PinPreset, Spring, SpringKind,
-        SpringParams, Wind,
+        Cloth, ClothBuilder, Energy, Material, ParticleSplit, PhysicsParams, PinPreset, Spring,
+        SpringKind, SpringParams, Wind,
     };
     pub use crate::collision::Obstacle;
     pub use crate::error::ClothError;
     pub use crate::math::{Pose, Rotation, Vector};
     pub use crate::simulation::Simulation;
     pub use crate::solver::{
-        ClothSolver, Integrator, Preconditioner, SolverSettings, StepReport, Substeps,
+        ClothSolver, Integrator, Preconditioner, SolverSettings, StepReport, Substeps, TearEvent,
     };
 }
 

@@ -22,3 +22,26 @@ pub fn max_penetration(cloth: &Cloth, obstacles: &[Obstacle]) -> f32 {
 pub fn max_stretch(cloth: &Cloth) -> f32 {
     cloth.max_strain(SpringKind::Stretch)
 }
+
+/// The pieces a cloth is in: groups of particles joined through triangles
+/// (1 for a whole cloth; a particle in no triangle is a piece of its own).
+pub fn pieces(cloth: &Cloth) -> usize {
+    let n = cloth.particle_count();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn root(parent: &mut [u32], mut i: u32) -> u32 {
+        while parent[i as usize] != i {
+            // Path halving keeps the trees shallow.
+            parent[i as usize] = parent[parent[i as usize] as usize];
+            i = parent[i as usize];
+        }
+        i
+    }
+    for t in cloth.triangles() {
+        let a = root(&mut parent, t[0]);
+        for &u in &t[1..] {
+            let b = root(&mut parent, u);
+            parent[b as usize] = a;
+        }
+    }
+    (0..n as u32).filter(|&i| root(&mut parent, i) == i).count()
+}

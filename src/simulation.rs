@@ -6,7 +6,9 @@ use serde::{Deserialize, Serialize};
 use crate::cloth::Cloth;
 use crate::collision::{Obstacle, ObstacleImpulse};
 use crate::error::ClothError;
-use crate::solver::{ClothSolver, Integrator, SolverCounters, SolverSettings, StepReport};
+use crate::solver::{
+    ClothSolver, Integrator, SolverCounters, SolverSettings, StepReport, TearEvent,
+};
 
 /// A [`Cloth`] (the data) with the [`ClothSolver`] that steps it.
 ///
@@ -73,6 +75,11 @@ impl Simulation {
     /// Momentum the cloth gave each obstacle during the last step.
     pub fn obstacle_impulses(&self) -> &[ObstacleImpulse] {
         self.solver.obstacle_impulses()
+    }
+
+    /// Where the cloth tore during the last step (see [`ClothSolver::tear_events`]).
+    pub fn tear_events(&self) -> &[TearEvent] {
+        self.solver.tear_events()
     }
 
     /// What the solver has done: steps, factorisations.

@@ -20,6 +20,8 @@ fn run_json_prints_exactly_one_object_with_every_metric() {
         "max_stretch",
         "self_intersections",
         "self_intersections_any_frame",
+        "torn_springs",
+        "pieces",
         "min_y",
         "centroid",
         "finite",
@@ -33,6 +35,11 @@ fn run_json_prints_exactly_one_object_with_every_metric() {
     assert_eq!(v["finite"], true);
     assert_eq!(v["frames"], 30);
     assert_eq!(v["centroid"].as_array().unwrap().len(), 3);
+    // Cotton does not tear: the drape ends whole.
+    assert_eq!(
+        (v["torn_springs"].as_u64(), v["pieces"].as_u64()),
+        (Some(0), Some(1))
+    );
 }
 
 #[test]

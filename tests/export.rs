@@ -130,6 +130,81 @@ fn run_export_glb_and_obj_agree_with_the_final_cloth() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `cloth3d run tear --json` tears the sheet in two, and its exports show
+/// the opening: the OBJ and the glb hold the split particles as vertices of
+/// their own, no triangle bridges the gap between the pieces, and the glb
+/// keeps every frame, those before the tear included.
+#[test]
+fn run_tear_reports_torn_springs_and_exports_the_opening() {
+    let dir = std::env::temp_dir().join(format!("cloth3d-tear-{}", std::process::id()));
+    let glb = dir.join("tear.glb");
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = cloth3d_ok(&[
+        "run",
+        "tear",
+        "--json",
+        "--export-glb",
+        glb.to_str().unwrap(),
+        "--export-obj",
+        dir.to_str().unwrap(),
+    ]);
+    let m: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(m["finite"], true);
+    assert!(m["torn_springs"].as_u64().unwrap() > 0, "{out}");
+    assert_eq!(m["pieces"], 2, "{out}");
+    let frames = m["frames"].as_u64().unwrap() as usize;
+    let grid = 64 * 32;
+
+    let obj = std::fs::read_to_string(dir.join(format!("frame_{frames:04}.obj"))).unwrap();
+    let numbers = |l: &str| -> Vec<f32> {
+        l.split_whitespace()
+            .skip(1)
+            .map(|x| x.split('/').next().unwrap().parse().unwrap())
+            .collect()
+    };
+    let vertices: Vec<Vector> = obj
+        .lines()
+        .filter(|l| l.starts_with("v "))
+        .map(|l| Vector::from_slice(&numbers(l)))
+        .collect();
+    assert!(vertices.len() > grid, "{} vertices", vertices.len());
+    let faces: Vec<[usize; 3]> = obj
+        .lines()
+        .filter(|l| l.starts_with("f "))
+        .map(|l| {
+            let f = numbers(l);
+            [f[0] as usize - 1, f[1] as usize - 1, f[2] as usize - 1]
+        })
+        .collect();
+    // The grid spacing is 1.9 cm and the cotton stretches under 15% before
+    // it tears; the opening is tens of centimetres wide.
+    let longest = |p: &[Vector], f: &[usize; 3]| {
+        (0..3)
+            .map(|k| (p[f[k]] - p[f[(k + 1) % 3]]).length())
+            .fold(0.0f32, f32::max)
+    };
+    for f in &faces {
+        assert!(
+            longest(&vertices, f) < 0.05,
+            "triangle {f:?} bridges the opening"
+        );
+    }
+    let (base, recorded, indices, _) = read_glb(&std::fs::read(&glb).unwrap());
+    assert_eq!(base.len(), vertices.len());
+    assert_eq!(indices, 3 * faces.len());
+    assert_eq!(recorded.len(), frames, "a frame was left out");
+    // The first frame, before any tear, is the whole sheet: its new
+    // particles sit on the particles they split from.
+    let first: Vec<Vector> = recorded[0].iter().map(|&p| Vector::from(p)).collect();
+    for f in &faces {
+        assert!(
+            longest(&first, f) < 0.05,
+            "frame 1: triangle {f:?} is torn open"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn run_plot_draws_three_curves() {
     let plot = std::env::temp_dir().join(format!("cloth3d-plot-{}.png", std::process::id()));

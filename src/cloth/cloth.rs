@@ -39,7 +39,7 @@ pub struct Cloth {
 }
 
 /// A new, never used [`Cloth::mass_revision`].
-fn next_mass_revision() -> u64 {
+pub(super) fn next_mass_revision() -> u64 {
     static NEXT: AtomicU64 = AtomicU64::new(1);
     NEXT.fetch_add(1, Ordering::Relaxed)
 }
@@ -133,6 +133,8 @@ impl Cloth {
                 triangles,
                 uvs: vec![[0.0, 0.0]; n],
                 grid: None,
+                split_from: None,
+                splits: Vec::new(),
             }),
             material,
             params: PhysicsParams::default(),
@@ -146,7 +148,8 @@ impl Cloth {
         self.particles.len()
     }
 
-    /// The grid this cloth was built on, if it was built by [`super::ClothBuilder`].
+    /// The grid this cloth was built on, if it was built by
+    /// [`super::ClothBuilder`] and has not torn since (see [`Topology::cells`]).
     pub fn grid(&self) -> Option<Grid> {
         self.topology.grid
     }
@@ -240,7 +243,7 @@ impl Cloth {
 
     /// Index of grid cell `(row, col)`.
     pub fn index(&self, row: usize, col: usize) -> Result<usize, ClothError> {
-        let grid = self.topology.grid.ok_or(ClothError::NotAGrid)?;
+        let grid = self.topology.cells().ok_or(ClothError::NotAGrid)?;
         if row >= grid.rows || col >= grid.cols {
             return Err(ClothError::CellOutOfRange {
                 row,
@@ -252,7 +255,7 @@ impl Cloth {
         Ok(row * grid.cols + col)
     }
 
-    fn check_index(&self, i: usize) -> Result<(), ClothError> {
+    pub(super) fn check_index(&self, i: usize) -> Result<(), ClothError> {
         if i < self.particles.len() {
             Ok(())
         } else {
@@ -318,7 +321,7 @@ impl Cloth {
 
     /// Replaces the pins by a preset (grid cloths only).
     pub fn apply_pin_preset(&mut self, preset: PinPreset) -> Result<(), ClothError> {
-        let grid = self.topology.grid.ok_or(ClothError::NotAGrid)?;
+        let grid = self.topology.cells().ok_or(ClothError::NotAGrid)?;
         self.unpin_all();
         for (r, c) in preset.cells(grid.cols, grid.rows) {
             self.pin_cell(r, c)?;

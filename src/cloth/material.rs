@@ -67,6 +67,17 @@ pub struct Material {
     /// model"). Below the limit the springs alone act.
     #[serde(default, deserialize_with = "crate::error::de::opt_positive")]
     pub stretch_limit: Option<f32>,
+    /// Strain past which a stretch spring tears (0.3: 30% past its rest
+    /// length), or `None`: the cloth never tears (the default). A tear splits
+    /// the particle at one end of the spring in two, across the pull, so the
+    /// mesh opens there (see `Cloth::split_particle`). With a stretch limit,
+    /// a tear strain at or above it is never reached.
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::error::de::opt_positive"
+    )]
+    pub tear_strain: Option<f32>,
 }
 
 /// The stretch limit of the woven presets (silk, cotton, denim, leather,
@@ -99,7 +110,15 @@ impl Material {
             density,
             color,
             stretch_limit: None,
+            tear_strain: None,
         }
+    }
+
+    /// The same material tearing where a stretch spring passes `strain` (a
+    /// strain: 0.3 for 30%; `None`: it never tears).
+    pub fn with_tear_strain(mut self, strain: Option<f32>) -> Self {
+        self.tear_strain = strain;
+        self
     }
 
     /// The same material with its stretch springs held within `limit` of
@@ -243,6 +262,9 @@ impl Material {
         positive("density", self.density)?;
         if let Some(limit) = self.stretch_limit {
             positive("stretch limit", limit)?;
+        }
+        if let Some(strain) = self.tear_strain {
+            positive("tear strain", strain)?;
         }
         if !self.color.iter().all(|c| c.is_finite()) {
             return Err(ClothError::NonFinite { name: "color" });

@@ -11,6 +11,7 @@ mod material;
 mod particles;
 mod physics;
 mod pins;
+mod split;
 mod springs;
 mod topology;
 
@@ -21,5 +22,7 @@ pub use material::{Material, SpringParams, WOVEN_STRETCH_LIMIT};
 pub use particles::Particles;
 pub use physics::{PhysicsParams, Wind};
 pub use pins::PinPreset;
+pub use split::ParticleSplit;
+pub(crate) use split::TopologyEdit;
 pub use springs::{Spring, SpringKind, Springs};
 pub use topology::{Grid, Topology};

@@ -4,12 +4,12 @@
 use serde::{Deserialize, Serialize};
 
 use super::desc::{
-    BodyDesc, BodyKind, ClothDesc, ObstacleDesc, PinsDesc, Placement, SceneDesc, ShapeDesc,
-    Waypoint,
+    AttachmentDesc, BodyDesc, BodyKind, ClothDesc, MaterialDesc, ObstacleDesc, PinsDesc, Placement,
+    SceneDesc, ShapeDesc, Waypoint,
 };
 use super::error::SceneError;
 use super::options::SceneOptions;
-use crate::cloth::{PinPreset, Wind};
+use crate::cloth::{Material, PinPreset, Wind};
 use crate::error::ClothError;
 use crate::math::Vector;
 
@@ -31,11 +31,14 @@ pub enum SceneKind {
     /// A 48×48 cloth dropped over a thin bar onto the ground, folding onto
     /// itself (self-collision on).
     Fold,
+    /// A 64×32 sheet held along its two short edges by kinematic rapier
+    /// bars that move apart until it tears.
+    Tear,
 }
 
 impl SceneKind {
     /// Every scene.
-    pub const ALL: [SceneKind; 7] = [
+    pub const ALL: [SceneKind; 8] = [
         SceneKind::Drape,
         SceneKind::Box,
         SceneKind::Flag,
@@ -43,6 +46,7 @@ impl SceneKind {
         SceneKind::Curtain,
         SceneKind::Hammock,
         SceneKind::Fold,
+        SceneKind::Tear,
     ];
 
     /// The scene's name.
@@ -55,6 +59,7 @@ impl SceneKind {
             SceneKind::Curtain => "curtain",
             SceneKind::Hammock => "hammock",
             SceneKind::Fold => "fold",
+            SceneKind::Tear => "tear",
         }
     }
 
@@ -70,6 +75,7 @@ impl SceneKind {
             SceneKind::Fold => {
                 "a cloth falls over a thin bar and folds onto itself on the ground (self-collision)"
             }
+            SceneKind::Tear => "two kinematic rapier bars pull a sheet apart until it tears",
         }
     }
 
@@ -111,6 +117,7 @@ impl SceneKind {
             SceneKind::Curtain => (40, 40),
             SceneKind::Hammock => (32, 32),
             SceneKind::Fold => (48, 48),
+            SceneKind::Tear => (64, 32),
         }
     }
 }
@@ -128,6 +135,18 @@ pub const FOLD_BAR_HEIGHT: f32 = 0.4;
 pub const FOLD_BAR_RADIUS: f32 = 0.02;
 /// How far (m, along x) the `fold` cloth's centre starts from the bar.
 pub const FOLD_OFFSET: f32 = 0.12;
+
+/// Half the distance (m, along x) between the `tear` scene's bars at the
+/// start, and `t` seconds into the scene: they hold still for a quarter of
+/// a second while the sheet settles, then move apart at 0.2 m/s each.
+pub fn tear_bar_x(t: f32) -> f32 {
+    TEAR_WIDTH / 2.0 + 0.2 * (t - 0.25).clamp(0.0, 1.75)
+}
+
+/// Width (m, along x, between the held edges) of the `tear` scene's sheet.
+pub const TEAR_WIDTH: f32 = 1.2;
+/// Strain past which the `tear` scene's cloth tears (15%).
+pub const TEAR_STRAIN: f32 = 0.15;
 
 /// Where the curtain's ball is (z, metres) `t` seconds into the scene.
 pub fn curtain_ball_z(t: f32) -> f32 {
@@ -176,6 +195,18 @@ impl SceneKind {
                     },
                 );
                 c.self_collision = true;
+                c
+            }
+            SceneKind::Tear => {
+                let mut c = ClothDesc::new(cols, rows, horizontal(1.0));
+                c.size = (TEAR_WIDTH, TEAR_WIDTH / 2.0);
+                // Cotton without its stretch limit, which would hold every
+                // spring under the tear strain.
+                c.material = MaterialDesc::Custom(
+                    Material::cotton()
+                        .with_stretch_limit(None)
+                        .with_tear_strain(Some(TEAR_STRAIN)),
+                );
                 c
             }
         };
@@ -238,6 +269,27 @@ impl SceneKind {
                 bar.rotation = Vector::new(std::f32::consts::FRAC_PI_2, 0.0, 0.0);
                 desc.obstacles.push(bar);
             }
+            SceneKind::Tear => {
+                // Two bars just above the sheet's short edges, each holding
+                // the particles of its edge.
+                for side in [-1.0f32, 1.0] {
+                    let at = |t: f32| Vector::new(side * tear_bar_x(t), 1.04, 0.0);
+                    let mut bar = BodyDesc::new(
+                        BodyKind::Kinematic,
+                        ShapeDesc::Cuboid {
+                            half_extents: Vector::new(0.02, 0.02, TEAR_WIDTH / 4.0 + 0.02),
+                        },
+                        at(0.0),
+                    );
+                    bar.path = [0.0, 0.25, 2.0]
+                        .map(|time| Waypoint {
+                            time,
+                            translation: at(time),
+                        })
+                        .to_vec();
+                    desc.bodies.push(bar);
+                }
+            }
             SceneKind::Hammock => {
                 desc.bodies.push(BodyDesc::new(
                     BodyKind::Fixed,
@@ -263,6 +315,19 @@ impl SceneKind {
             variant: None,
             ..options.clone()
         })?;
+        if self == SceneKind::Tear {
+            // Each bar holds its edge's particles (at the grid chosen).
+            let (cols, rows) = (desc.cloth.cols, desc.cloth.rows);
+            for (body, col) in [(0, 0), (1, cols - 1)] {
+                for row in 0..rows {
+                    desc.attachments.push(AttachmentDesc {
+                        particle: row * cols + col,
+                        body,
+                        local_point: None,
+                    });
+                }
+            }
+        }
         Ok(desc)
     }
 

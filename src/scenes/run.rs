@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::world::Scene;
 use crate::collision::self_intersections;
 use crate::error::ClothError;
-use crate::metrics::max_stretch;
+use crate::metrics::{max_stretch, pieces};
 use crate::solver::SolverSettings;
 
 /// The metrics of one run of a scene, as `cloth3d run --json` prints them.
@@ -50,6 +50,14 @@ pub struct RunMetrics {
     pub self_intersections: usize,
     /// The most self-intersections of any frame.
     pub self_intersections_any_frame: usize,
+    /// Stretch springs that tore over the run (0 unless the material has a
+    /// tear strain, as the `tear` scene's has).
+    #[serde(default)]
+    pub torn_springs: u64,
+    /// Pieces the cloth is in on the final frame (1 for a whole cloth;
+    /// see [`crate::metrics::pieces`]).
+    #[serde(default = "one")]
+    pub pieces: usize,
     /// Lowest particle height on the final frame, in metres.
     pub min_y: f32,
     /// Centre of the cloth on the final frame, in metres.
@@ -75,6 +83,10 @@ pub struct RunMetrics {
     pub particle_substeps_per_s: f64,
 }
 
+fn one() -> usize {
+    1
+}
+
 /// Runs a scene for `frames` frames and gathers its metrics.
 ///
 /// A diverging step ends the run with its error; the scene keeps its last finite state.
@@ -95,6 +107,7 @@ pub fn run_with(
     let mut iterations = 0u64;
     let mut deepest_any = 0.0f32;
     let mut crossings_any = 0;
+    let mut torn = 0u64;
     for f in 0..frames {
         let start = Instant::now();
         let report = scene.step_frame()?;
@@ -102,6 +115,7 @@ pub fn run_with(
         substeps_total += report.substeps as u64;
         max_substeps = max_substeps.max(report.substeps);
         iterations += report.iterations as u64;
+        torn += report.torn_springs as u64;
         let deepest = scene.max_penetration();
         deepest_any = deepest_any.max(deepest);
         crossings_any = crossings_any.max(self_intersections(&scene.cloth));
@@ -109,7 +123,8 @@ pub fn run_with(
     }
     let cloth = &scene.cloth;
     let grid = cloth
-        .grid()
+        .topology()
+        .cells()
         .map(|g| [g.cols, g.rows])
         .unwrap_or([cloth.particle_count(), 1]);
     let min_y = cloth
@@ -136,6 +151,8 @@ pub fn run_with(
         max_stretch: max_stretch(cloth),
         self_intersections: self_intersections(cloth),
         self_intersections_any_frame: crossings_any,
+        torn_springs: torn,
+        pieces: pieces(cloth),
         min_y,
         centroid: [c.x, c.y, c.z],
         energy: cloth.energy().total(),

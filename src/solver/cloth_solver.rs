@@ -11,6 +11,7 @@ use super::settings::SolverSettings;
 use super::stability::stable_substeps;
 use super::state::SolverState;
 use super::substeps::{self_collision_substeps, Substeps};
+use super::tearing::TearEvent;
 use super::workspace::Workspace;
 use crate::cloth::Cloth;
 use crate::collision::ObstacleImpulse;
@@ -101,6 +102,13 @@ impl ClothSolver {
     /// as the obstacles passed to [`ClothSolver::step`]).
     pub fn obstacle_impulses(&self) -> &[ObstacleImpulse] {
         self.workspace.collision.impulses()
+    }
+
+    /// Where the cloth tore during the last step: one event per stretch
+    /// spring strained past the material's tear strain (empty when nothing
+    /// tore or the material does not tear).
+    pub fn tear_events(&self) -> &[TearEvent] {
+        &self.workspace.tearing.events
     }
 
     /// What the solver has done since it was made (or cloned).

@@ -24,6 +24,10 @@ pub struct StepReport {
     /// substeps (0 without self-collision).
     #[serde(default)]
     pub self_contacts: u32,
+    /// Stretch springs that tore at the end of the step (0 unless the
+    /// material has a tear strain); see [`crate::solver::ClothSolver::tear_events`].
+    #[serde(default)]
+    pub torn_springs: u32,
 }
 
 /// What a solver has done since it was made.

@@ -11,6 +11,8 @@
 //!               → resolve contacts (with the friction policy the
 //!               integrator handed back)
 //! divergence check → roll back and report, or commit the time
+//!     → tearing (cloths whose material tears: split the particles at the
+//!       ends of overstrained stretch springs)
 //! ```
 //!
 //! The stages' loops over particles, bands and springs run on the team
@@ -99,7 +101,7 @@ impl ClothSolver {
 
         // Below a few thousand particles the loops are too short to share.
         let threads = self.settings.parallel && n >= TEAM_MIN_PARTICLES;
-        let report = with_team(threads, |team| {
+        let mut report = with_team(threads, |team| {
             self.substeps(cloth, obstacles, (dt, k), team)
         })?;
         // Divergence check.
@@ -116,6 +118,7 @@ impl ClothSolver {
         }
         cloth.time += dt as f64;
         self.steps += 1;
+        report.torn_springs = self.workspace.tearing.run(cloth);
         Ok(report)
     }
 

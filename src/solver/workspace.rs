@@ -5,6 +5,7 @@
 
 use super::fast_mass_spring::FastMassSpringState;
 use super::implicit_euler::ImplicitState;
+use super::tearing::Tearing;
 use super::xpbd::XpbdScratch;
 use crate::collision::{CollisionStage, SelfContacts};
 use crate::math::Vector;
@@ -36,6 +37,8 @@ pub(crate) struct Workspace {
     pub collision: CollisionStage,
     /// The self-collision stage: pairs of a particle and a triangle of the same cloth.
     pub self_contacts: SelfContacts,
+    /// The tearing stage: its scratch and the last step's tears.
+    pub tearing: Tearing,
 }
 
 impl Workspace {

@@ -74,6 +74,9 @@ pub struct SceneView {
     group: SceneNode3d,
     cloth: SceneNode3d,
     obstacles: Vec<Option<SceneNode3d>>,
+    /// The topology the mesh's faces were taken from (its address): a torn
+    /// cloth gets a new one, with more particles and triangles.
+    shown_topology: usize,
 }
 
 impl SceneView {
@@ -98,6 +101,7 @@ impl SceneView {
             group,
             cloth: cloth_node,
             obstacles,
+            shown_topology: std::sync::Arc::as_ptr(cloth.topology()) as usize,
         };
         view.sync(scene);
         view
@@ -105,6 +109,22 @@ impl SceneView {
 
     /// Moves the mesh vertices and the obstacles to where the scene has them now.
     pub fn sync(&mut self, scene: &Scene) {
+        let topology = scene.cloth.topology();
+        if std::sync::Arc::as_ptr(topology) as usize != self.shown_topology {
+            // The cloth tore: new particles, triangles moved to them.
+            self.shown_topology = std::sync::Arc::as_ptr(topology) as usize;
+            let n = scene.cloth.particle_count();
+            self.cloth.modify_faces(&mut |f: &mut Vec<[u32; 3]>| {
+                f.clear();
+                f.extend_from_slice(topology.triangles());
+            });
+            self.cloth.modify_uvs(&mut |u: &mut Vec<Vec2>| {
+                u.clear();
+                u.extend(topology.uvs().iter().map(|&[a, b]| Vec2::new(a, b)));
+            });
+            self.cloth
+                .modify_normals(&mut |v: &mut Vec<Vec3>| v.resize(n, Vec3::Y));
+        }
         let positions = scene.cloth.positions();
         self.cloth.modify_vertices(&mut |v: &mut Vec<Vec3>| {
             v.clear();
@@ -210,6 +230,8 @@ pub fn camera_for(scene: &Scene) -> OrbitCamera3d {
         SceneKind::Hammock => (Vec3::new(0.8, 0.7, 1.05), Vec3::new(0.0, 0.3, 0.0)),
         // Nearly along the bar, to see the layers' profile.
         SceneKind::Fold => (Vec3::new(0.55, 0.5, 1.45), Vec3::new(0.05, 0.2, 0.0)),
+        // From the front and above, to look into the opening.
+        SceneKind::Tear => (Vec3::new(0.45, 1.75, 1.55), Vec3::new(0.0, 0.85, 0.0)),
     };
     OrbitCamera3d::new(eye, at)
 }

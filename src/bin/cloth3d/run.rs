@@ -148,6 +148,19 @@ fn print_table(m: &RunMetrics) {
         m.max_stretch,
         100.0 * m.max_stretch
     );
+    outln!(
+        out,
+        "self_intersections         {} (worst frame {})",
+        m.self_intersections,
+        m.self_intersections_any_frame
+    );
+    outln!(
+        out,
+        "torn_springs               {} ({} piece{})",
+        m.torn_springs,
+        m.pieces,
+        if m.pieces == 1 { "" } else { "s" }
+    );
     outln!(out, "min_y                      {:.4} m", m.min_y);
     outln!(
         out,
