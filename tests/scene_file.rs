@@ -200,6 +200,43 @@ fn a_file_turns_self_collision_on_with_its_thickness() {
     assert!(err.contains("cloth.self_thickness"), "{err}");
 }
 
+/// A file's cuts open slits before the cloth moves, and its material can
+/// tear; a cut that is no straight run of cells is refused, naming it.
+#[test]
+fn a_file_cuts_slits_and_tears() {
+    let cut = GOOD
+        .replace(
+            "            density: 0.1,\n",
+            "            density: 0.1,\n            tear_strain: Some(0.2),\n",
+        )
+        .replace(
+            "        pins: (preset: TwoCorners, cells: [(7, 7)]),",
+            "        pins: (preset: TwoCorners, cells: [(7, 7)]),\n        cuts: [(from: (2, 3), to: (5, 3))],",
+        );
+    let scene = Scene::from_desc(file::from_ron(&cut).unwrap()).unwrap();
+    assert_eq!(scene.cloth.material.tear_strain, Some(0.2));
+    // Four particles split down column 3: four more, in one piece still
+    // (the slit ends inside the cloth).
+    assert_eq!(scene.cloth.particle_count(), 64 + 4);
+    assert_eq!(cloth3d::metrics::pieces(&scene.cloth), 1);
+    assert_eq!(scene.cloth.topology().splits().len(), 4);
+    let err = error_of(&cut.replace("to: (5, 3)", "to: (5, 4)"));
+    assert!(
+        err.contains("cloth.cuts[0]") && err.contains("one row or one column"),
+        "{err}"
+    );
+    let err = error_of(&cut.replace("to: (5, 3)", "to: (9, 3)"));
+    assert!(
+        err.contains("cloth.cuts[0]") && err.contains("outside"),
+        "{err}"
+    );
+    let err = error_of(&cut.replace("Some(0.2)", "Some(-0.2)"));
+    assert!(
+        err.contains("tear_strain") || err.contains("tear strain"),
+        "{err}"
+    );
+}
+
 #[test]
 fn a_bad_file_names_the_line_and_the_field() {
     let cases: [(&str, &str, usize, &str); 8] = [

@@ -4,8 +4,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::desc::{
-    AttachmentDesc, BodyDesc, BodyKind, ClothDesc, MaterialDesc, ObstacleDesc, PinsDesc, Placement,
-    SceneDesc, ShapeDesc, Waypoint,
+    AttachmentDesc, BodyDesc, BodyKind, ClothDesc, CutDesc, MaterialDesc, ObstacleDesc, PinsDesc,
+    Placement, SceneDesc, ShapeDesc, Waypoint,
 };
 use super::error::SceneError;
 use super::options::SceneOptions;
@@ -316,8 +316,15 @@ impl SceneKind {
             ..options.clone()
         })?;
         if self == SceneKind::Tear {
-            // Each bar holds its edge's particles (at the grid chosen).
+            // Each bar holds its edge's particles (at the grid chosen), and
+            // a slit across the middle fifth of the sheet, halfway between
+            // them, is where the tear starts.
             let (cols, rows) = (desc.cloth.cols, desc.cloth.rows);
+            let (mid, half) = ((cols - 1) / 2, rows / 10);
+            desc.cloth.cuts.push(CutDesc {
+                from: (rows / 2 - half, mid),
+                to: ((rows / 2 + half).min(rows - 1), mid),
+            });
             for (body, col) in [(0, 0), (1, cols - 1)] {
                 for row in 0..rows {
                     desc.attachments.push(AttachmentDesc {

@@ -136,6 +136,52 @@ pub struct ClothDesc {
         deserialize_with = "crate::error::de::opt_positive"
     )]
     pub self_thickness: Option<f32>,
+    /// Cuts made before the cloth moves: each splits the particles of a
+    /// straight run of grid cells across the run, so the cloth starts with
+    /// a slit there (a tear starts at its ends).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cuts: Vec<CutDesc>,
+}
+
+/// A straight cut along a grid row or column: the particles from `from` to
+/// `to` (both included, `(row, column)`, in one row or one column) are each
+/// split in two across the cut (see `Cloth::split_particle`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CutDesc {
+    /// First cell, `(row, column)`.
+    pub from: (usize, usize),
+    /// Last cell, `(row, column)`: in the same row or the same column.
+    pub to: (usize, usize),
+}
+
+impl CutDesc {
+    /// The cells of the cut and whether it runs along a column, or an error
+    /// saying why there is no such cut on a `cols × rows` grid.
+    pub(crate) fn cells(
+        &self,
+        cols: usize,
+        rows: usize,
+    ) -> Result<(Vec<(usize, usize)>, bool), String> {
+        let ((r0, c0), (r1, c1)) = (self.from, self.to);
+        if r0.max(r1) >= rows || c0.max(c1) >= cols {
+            return Err(format!(
+                "cell ({}, {}) is outside the {cols} × {rows} grid",
+                r0.max(r1),
+                c0.max(c1)
+            ));
+        }
+        if r0 != r1 && c0 != c1 {
+            return Err("a cut runs along one row or one column".into());
+        }
+        let along_column = c0 == c1;
+        let cells = if along_column {
+            (r0.min(r1)..=r0.max(r1)).map(|r| (r, c0)).collect()
+        } else {
+            (c0.min(c1)..=c0.max(c1)).map(|c| (r0, c)).collect()
+        };
+        Ok((cells, along_column))
+    }
 }
 
 /// Where a cloth starts.
@@ -613,6 +659,7 @@ impl ClothDesc {
             pins: PinsDesc::default(),
             self_collision: false,
             self_thickness: None,
+            cuts: Vec::new(),
         }
     }
 }

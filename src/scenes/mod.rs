@@ -14,8 +14,8 @@ mod world;
 
 pub use catalogue::{curtain_ball_z, SceneKind};
 pub use desc::{
-    AttachmentDesc, BodyDesc, BodyKind, ClothDesc, MaterialDesc, ObstacleDesc, PinsDesc, Placement,
-    SceneDesc, ShapeDesc, Waypoint, CLOTH_MASS, FRAME_DT, THICKNESS,
+    AttachmentDesc, BodyDesc, BodyKind, ClothDesc, CutDesc, MaterialDesc, ObstacleDesc, PinsDesc,
+    Placement, SceneDesc, ShapeDesc, Waypoint, CLOTH_MASS, FRAME_DT, THICKNESS,
 };
 pub use error::SceneError;
 pub use options::{SceneOptions, SolverTuning};

@@ -160,6 +160,32 @@ impl Scene {
                 .pin_cell(row, col)
                 .map_err(|e| SceneError::field("cloth.pins.cells", e))?;
         }
+        for (i, cut) in c.cuts.iter().enumerate() {
+            let field = || format!("cloth.cuts[{i}]");
+            let (cells, along_column) = cut
+                .cells(c.cols, c.rows)
+                .map_err(|e| SceneError::field(field(), e))?;
+            for (row, col) in cells {
+                // Across the cut: along the grid's rows for a cut down a
+                // column, along its columns for one across a row.
+                let (r2, c2) = match along_column {
+                    true if col + 1 < c.cols => (row, col + 1),
+                    true => (row, col - 1),
+                    false if row + 1 < c.rows => (row + 1, col),
+                    false => (row - 1, col),
+                };
+                let at = |r, c| cloth.index(r, c).map(|i| cloth.positions()[i]);
+                let normal = at(r2, c2)
+                    .and_then(|p| Ok(p - at(row, col)?))
+                    .map_err(|e| SceneError::field(field(), e))?;
+                let i = cloth
+                    .index(row, col)
+                    .map_err(|e| SceneError::field(field(), e))?;
+                cloth
+                    .split_particle(i, normal)
+                    .map_err(|e| SceneError::field(field(), e))?;
+            }
+        }
         cloth.params.wind = desc.wind;
         cloth.params.gravity = desc.gravity;
         cloth.params.air_drag = desc.air_drag;
