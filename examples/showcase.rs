@@ -9,7 +9,7 @@
 //! cargo run --release --features viewer --example showcase -- --scene examples/scenes/capsule_drape.ron
 //! ```
 //!
-//! Keys: 1–8 scene · I integrator · M material · P pin preset · Space pause ·
+//! Keys: 1–9 scene · I integrator · M material · P pin preset · Space pause ·
 //! N one frame · R reset · W wind · T spring trace · click a particle to
 //! select it · X pin/unpin it · Ctrl+drag to pull it · Shift+drag to tear
 //! the cloth along the cursor's path · H help.
@@ -234,6 +234,7 @@ async fn interactive(source: String, options: SceneOptions) {
                         Key::Key6,
                         Key::Key7,
                         Key::Key8,
+                        Key::Key9,
                     ]
                     .iter()
                     .position(|k| *k == key);
@@ -417,7 +418,7 @@ fn overlay_text(window: &mut Window, font: &std::sync::Arc<Font>, app: &Showcase
         );
     }
     if app.help {
-        let help = "1-8 scene  I integrator  M material  P pins  Space pause  N step  R reset  W wind  T trace  click select  X pin  Ctrl+drag pull  Shift+drag tear  H help";
+        let help = "1-9 scene  I integrator  M material  P pins  Space pause  N step  R reset  W wind  T trace  click select  X pin  Ctrl+drag pull  Shift+drag tear  H help";
         let y = window.size()[1] as f32 * window.scale_factor() as f32 - 30.0;
         window.draw_text(
             help,

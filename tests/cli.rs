@@ -469,6 +469,30 @@ fn compare_honours_the_solver_flags() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `cloth3d run stack --json`: the three cloths lie on each other on the
+/// ball without crossing on the last frame, and hardly in any; with
+/// self-collision off they pass through each other thousands of times.
+#[test]
+fn run_stack_keeps_its_cloths_apart_and_without_self_collision_they_cross() {
+    let run = |extra: &[&str]| {
+        let mut args = vec!["run", "stack", "--json"];
+        args.extend_from_slice(extra);
+        let v: serde_json::Value = serde_json::from_str(cloth3d_ok(&args).trim()).unwrap();
+        v
+    };
+    let on = run(&[]);
+    assert_eq!(on["finite"], true);
+    assert_eq!(on["pieces"], 3, "{on}");
+    assert_eq!(on["self_intersections"], 0, "{on}");
+    assert!(
+        on["self_intersections_any_frame"].as_u64().unwrap() <= 10,
+        "{on}"
+    );
+    assert!(on["max_penetration"].as_f64().unwrap() < 0.005, "{on}");
+    let off = run(&["--self-collision=off"]);
+    assert!(off["self_intersections"].as_u64().unwrap() > 1000, "{off}");
+}
+
 #[test]
 fn self_collision_is_the_scenes_own_and_the_flag_turns_it_either_way() {
     // A short fold at a coarse grid: its halves meet under the bar by then.

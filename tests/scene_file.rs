@@ -237,6 +237,44 @@ fn a_file_cuts_slits_and_tears() {
     );
 }
 
+/// A file with a list of more cloths builds them all, numbered after the
+/// first; a cloth of another material is refused, naming it.
+#[test]
+fn a_file_takes_more_cloths() {
+    let material = r#"Custom((
+            name: "mine",
+            stretch: (stiffness: 3000.0, damping: 1.0),
+            shear: (stiffness: 600.0, damping: 0.5),
+            bend: (stiffness: 4.0, damping: 0.05),
+            density: 0.1,
+        ))"#;
+    let two = GOOD.replace(
+        "    obstacles: [",
+        &format!(
+            "    cloths: [(\n        cols: 6,\n        rows: 5,\n        placement: Horizontal(center: (0.0, 0.9, 0.0)),\n        material: {material},\n        pins: (cells: [(0, 0)]),\n    )],\n    obstacles: ["
+        ),
+    );
+    let scene = Scene::from_desc(file::from_ron(&two).unwrap()).unwrap();
+    assert_eq!(scene.cloth.particle_count(), 64 + 30);
+    assert_eq!(cloth3d::metrics::pieces(&scene.cloth), 2);
+    // The second cloth's pin is its particle 0: the joined cloth's 64.
+    assert!(scene.cloth.is_pinned(64) && !scene.cloth.is_pinned(65));
+    assert!((scene.cloth.positions()[64].y - 0.9).abs() < 1e-6);
+    let err = error_of(&two.replace(
+        &format!("material: {material},\n        pins: (cells"),
+        "pins: (cells",
+    ));
+    assert!(
+        err.contains("cloths[0].material") && err.contains("cotton"),
+        "{err}"
+    );
+    let err = error_of(&two.replace("cols: 6,", "cols: 1,"));
+    assert!(
+        err.contains("cloths[0].cols") || err.contains("cols"),
+        "{err}"
+    );
+}
+
 #[test]
 fn a_bad_file_names_the_line_and_the_field() {
     let cases: [(&str, &str, usize, &str); 8] = [

@@ -7,6 +7,7 @@ mod builder;
 #[allow(clippy::module_inception)]
 mod cloth;
 mod energy;
+mod join;
 mod material;
 mod particles;
 mod physics;

@@ -34,11 +34,14 @@ pub enum SceneKind {
     /// A 64×32 sheet held along its two short edges by kinematic rapier
     /// bars that move apart until it tears.
     Tear,
+    /// Three 32×32 cloths dropped onto a ball one after the other, lying on
+    /// each other (self-collision on).
+    Stack,
 }
 
 impl SceneKind {
     /// Every scene.
-    pub const ALL: [SceneKind; 8] = [
+    pub const ALL: [SceneKind; 9] = [
         SceneKind::Drape,
         SceneKind::Box,
         SceneKind::Flag,
@@ -47,6 +50,7 @@ impl SceneKind {
         SceneKind::Hammock,
         SceneKind::Fold,
         SceneKind::Tear,
+        SceneKind::Stack,
     ];
 
     /// The scene's name.
@@ -60,6 +64,7 @@ impl SceneKind {
             SceneKind::Hammock => "hammock",
             SceneKind::Fold => "fold",
             SceneKind::Tear => "tear",
+            SceneKind::Stack => "stack",
         }
     }
 
@@ -76,6 +81,9 @@ impl SceneKind {
                 "a cloth falls over a thin bar and folds onto itself on the ground (self-collision)"
             }
             SceneKind::Tear => "two kinematic rapier bars pull a sheet apart until it tears",
+            SceneKind::Stack => {
+                "three cloths fall on a ball one after the other and lie on each other (self-collision)"
+            }
         }
     }
 
@@ -118,6 +126,7 @@ impl SceneKind {
             SceneKind::Hammock => (32, 32),
             SceneKind::Fold => (48, 48),
             SceneKind::Tear => (64, 32),
+            SceneKind::Stack => (32, 32),
         }
     }
 }
@@ -143,6 +152,10 @@ pub fn tear_bar_x(t: f32) -> f32 {
     TEAR_WIDTH / 2.0 + 0.2 * (t - 0.25).clamp(0.0, 1.75)
 }
 
+/// Heights (m) the `stack` scene's cloths start at, and the turn (radians,
+/// about the vertical) of each, so that their corners fan out.
+pub const STACK_LAYERS: [(f32, f32); 3] = [(0.55, 0.0), (0.8, 0.4), (1.05, 0.8)];
+
 /// Width (m, along x, between the held edges) of the `tear` scene's sheet.
 pub const TEAR_WIDTH: f32 = 1.2;
 /// Strain past which the `tear` scene's cloth tears (15%).
@@ -162,6 +175,8 @@ impl SceneKind {
         let horizontal = |y: f32| Placement::Horizontal {
             center: Vector::new(0.0, y, 0.0),
         };
+        // The cloths after the first, for the scenes that have several.
+        let mut stacked = Vec::new();
         let mut cloth = match self {
             SceneKind::Drape | SceneKind::Box | SceneKind::Pins => {
                 ClothDesc::new(cols, rows, horizontal(0.6))
@@ -197,6 +212,24 @@ impl SceneKind {
                 c.self_collision = true;
                 c
             }
+            SceneKind::Stack => {
+                let layer = |(height, turn): (f32, f32)| {
+                    let mut c = ClothDesc::new(
+                        cols,
+                        rows,
+                        Placement::Pose {
+                            translation: Vector::new(0.0, height, 0.0),
+                            rotation: Vector::new(0.0, turn, 0.0),
+                        },
+                    );
+                    c.size = (0.9, 0.9);
+                    c.self_collision = true;
+                    c
+                };
+                let [first, more @ ..] = STACK_LAYERS;
+                stacked = more.map(layer).to_vec();
+                layer(first)
+            }
             SceneKind::Tear => {
                 let mut c = ClothDesc::new(cols, rows, horizontal(1.0));
                 c.size = (TEAR_WIDTH, TEAR_WIDTH / 2.0);
@@ -218,10 +251,11 @@ impl SceneKind {
             _ => PinPreset::None,
         });
         let mut desc = SceneDesc::new(self.name(), cloth);
+        desc.cloths = stacked;
         desc.description = self.description().to_string();
         desc.frames = self.default_frames();
         match self {
-            SceneKind::Drape => desc.obstacles.push(ObstacleDesc::fixed(
+            SceneKind::Drape | SceneKind::Stack => desc.obstacles.push(ObstacleDesc::fixed(
                 ShapeDesc::Ball { radius: 0.3 },
                 Vector::ZERO,
             )),

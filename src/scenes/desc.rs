@@ -35,8 +35,16 @@ pub struct SceneDesc {
     /// One line saying what a user sees.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub description: String,
-    /// The cloth.
+    /// The cloth (the first, when the scene has several).
     pub cloth: ClothDesc,
+    /// More cloths in the same scene. The scene steps all its cloths as one
+    /// (`Cloth::join`): they share the first cloth's material, the solver,
+    /// the obstacles and the rapier world, and they meet through
+    /// self-collision, which is on for all when any of them has it. Their
+    /// particles are numbered after the first cloth's, in order (for
+    /// `attachments`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cloths: Vec<ClothDesc>,
     /// Shapes the cloth collides with, outside any rapier world.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub obstacles: Vec<ObstacleDesc>,
@@ -631,6 +639,7 @@ impl SceneDesc {
             name: name.into(),
             description: String::new(),
             cloth,
+            cloths: Vec::new(),
             obstacles: Vec::new(),
             bodies: Vec::new(),
             attachments: Vec::new(),

@@ -54,13 +54,23 @@ pub struct SolverTuning {
 
 impl SceneDesc {
     /// Applies the user's overrides: grid (rows follow the aspect ratio),
-    /// integrator, material, pin preset, dt, substeps, self-collision, frames,
+    /// material and self-collision (of every cloth), integrator, pin preset
+    /// (of the first cloth), dt, substeps, self-collision, frames,
     /// friction.
     pub fn apply(&mut self, options: &SceneOptions) -> Result<(), ClothError> {
-        if let Some(n) = options.n {
-            let (c, r) = (self.cloth.cols, self.cloth.rows);
-            self.cloth.cols = n;
-            self.cloth.rows = ((n as f32 * r as f32 / c as f32).round() as usize).max(2);
+        let cloths = std::iter::once(&mut self.cloth).chain(&mut self.cloths);
+        for cloth in cloths {
+            if let Some(n) = options.n {
+                let (c, r) = (cloth.cols, cloth.rows);
+                cloth.cols = n;
+                cloth.rows = ((n as f32 * r as f32 / c as f32).round() as usize).max(2);
+            }
+            if let Some(m) = &options.material {
+                cloth.material = MaterialDesc::of(m);
+            }
+            if let Some(on) = options.self_collision {
+                cloth.self_collision = on;
+            }
         }
         if let Some(i) = options.integrator {
             self.solver.integrator = i;
@@ -68,9 +78,6 @@ impl SceneDesc {
                 // The scene's substeps were chosen for its own integrator.
                 self.solver.substeps = i.default_substeps();
             }
-        }
-        if let Some(m) = &options.material {
-            self.cloth.material = MaterialDesc::of(m);
         }
         if let Some(v) = options.variant {
             self.cloth.pins = PinsDesc::preset(v);
@@ -105,9 +112,6 @@ impl SceneDesc {
             settings.edge_collisions = edges;
         }
         settings.validate()?;
-        if let Some(on) = options.self_collision {
-            self.cloth.self_collision = on;
-        }
         if let Some(f) = options.frames {
             self.frames = f;
         }

@@ -122,11 +122,12 @@ pub fn run_with(
         on_frame(scene, f, deepest);
     }
     let cloth = &scene.cloth;
+    // A torn cloth's cells are still its grid's; several cloths report the first's.
     let grid = cloth
         .topology()
         .cells()
         .map(|g| [g.cols, g.rows])
-        .unwrap_or([cloth.particle_count(), 1]);
+        .unwrap_or([scene.desc.cloth.cols, scene.desc.cloth.rows]);
     let min_y = cloth
         .positions()
         .iter()

@@ -5,7 +5,7 @@
 use rapier3d::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle};
 
 use super::catalogue::SceneKind;
-use super::desc::{BodyDesc, BodyKind, Placement, SceneDesc};
+use super::desc::{BodyDesc, BodyKind, ClothDesc, Placement, SceneDesc};
 use super::error::SceneError;
 use super::options::SceneOptions;
 use crate::cloth::{Cloth, ClothBuilder, PinPreset};
@@ -121,76 +121,26 @@ impl Scene {
     /// A value the description cannot hold (a pin outside the grid, a mesh
     /// index out of range) is a [`SceneError::File`] naming the field.
     pub fn from_desc(desc: SceneDesc) -> Result<Scene, SceneError> {
-        let c = &desc.cloth;
-        let material = c
-            .material
-            .material()
-            .map_err(|e| SceneError::field("cloth.material", e))?;
-        let mut builder = ClothBuilder::new(c.cols, c.rows)
-            .size(c.size.0, c.size.1)
-            .material(material)
-            .pins(c.pins.preset);
-        builder = match c.mass {
-            Some(m) => builder.total_mass(m),
-            None => builder.mass_from_density(),
-        };
-        builder = match c.placement {
-            Placement::Horizontal { center } => builder.horizontal(center),
-            Placement::Vertical { center } => builder.vertical(center),
-            Placement::Pose {
-                translation,
-                rotation,
-            } => builder.pose(Pose::from_parts(
-                translation,
-                Rotation::from_scaled_axis(rotation),
-            )),
-        };
-        for &p in &c.pins.particles {
-            builder = builder.pin(p);
+        // The scene's cloths, joined into one so that they meet through
+        // self-collision (on when any of them has it).
+        let mut pieces = vec![build_cloth(&desc.cloth, "cloth")?];
+        for (i, c) in desc.cloths.iter().enumerate() {
+            pieces.push(build_cloth(c, &format!("cloths[{i}]"))?);
         }
-        let mut cloth = builder.build().map_err(|e| match e {
-            ClothError::ParticleOutOfRange { .. } => SceneError::field("cloth.pins.particles", e),
-            ClothError::GridTooLarge { .. } | ClothError::GridTooSmall { .. } => {
-                SceneError::field("cloth.cols", e)
+        let self_collision =
+            desc.cloth.self_collision || desc.cloths.iter().any(|c| c.self_collision);
+        let mut cloth = Cloth::join(pieces).map_err(|e| match e {
+            ClothError::InvalidTopology { index, .. } => {
+                SceneError::field(format!("cloths[{}].material", index - 1), e)
             }
             other => SceneError::from(other),
         })?;
-        for &(row, col) in &c.pins.cells {
-            cloth
-                .pin_cell(row, col)
-                .map_err(|e| SceneError::field("cloth.pins.cells", e))?;
-        }
-        for (i, cut) in c.cuts.iter().enumerate() {
-            let field = || format!("cloth.cuts[{i}]");
-            let (cells, along_column) = cut
-                .cells(c.cols, c.rows)
-                .map_err(|e| SceneError::field(field(), e))?;
-            for (row, col) in cells {
-                // Across the cut: along the grid's rows for a cut down a
-                // column, along its columns for one across a row.
-                let (r2, c2) = match along_column {
-                    true if col + 1 < c.cols => (row, col + 1),
-                    true => (row, col - 1),
-                    false if row + 1 < c.rows => (row + 1, col),
-                    false => (row - 1, col),
-                };
-                let at = |r, c| cloth.index(r, c).map(|i| cloth.positions()[i]);
-                let normal = at(r2, c2)
-                    .and_then(|p| Ok(p - at(row, col)?))
-                    .map_err(|e| SceneError::field(field(), e))?;
-                let i = cloth
-                    .index(row, col)
-                    .map_err(|e| SceneError::field(field(), e))?;
-                cloth
-                    .split_particle(i, normal)
-                    .map_err(|e| SceneError::field(field(), e))?;
-            }
-        }
+        let c = &desc.cloth;
         cloth.params.wind = desc.wind;
         cloth.params.gravity = desc.gravity;
         cloth.params.air_drag = desc.air_drag;
         cloth.params.thickness = desc.thickness;
-        cloth.params.self_collision = c.self_collision;
+        cloth.params.self_collision = self_collision;
         cloth.params.self_friction = desc.friction;
         cloth.params.self_thickness = c.self_thickness;
         cloth.params.validate()?;
@@ -396,4 +346,76 @@ fn rapier_side(
         paths,
         last_speeds: Vec::new(),
     })
+}
+
+/// Builds one cloth of a description; `at` names it in errors (`cloth`,
+/// `cloths[0]`).
+fn build_cloth(c: &ClothDesc, at: &str) -> Result<Cloth, SceneError> {
+    let material = c
+        .material
+        .material()
+        .map_err(|e| SceneError::field(format!("{at}.material"), e))?;
+    let mut builder = ClothBuilder::new(c.cols, c.rows)
+        .size(c.size.0, c.size.1)
+        .material(material)
+        .pins(c.pins.preset);
+    builder = match c.mass {
+        Some(m) => builder.total_mass(m),
+        None => builder.mass_from_density(),
+    };
+    builder = match c.placement {
+        Placement::Horizontal { center } => builder.horizontal(center),
+        Placement::Vertical { center } => builder.vertical(center),
+        Placement::Pose {
+            translation,
+            rotation,
+        } => builder.pose(Pose::from_parts(
+            translation,
+            Rotation::from_scaled_axis(rotation),
+        )),
+    };
+    for &p in &c.pins.particles {
+        builder = builder.pin(p);
+    }
+    let mut cloth = builder.build().map_err(|e| match e {
+        ClothError::ParticleOutOfRange { .. } => {
+            SceneError::field(format!("{at}.pins.particles"), e)
+        }
+        ClothError::GridTooLarge { .. } | ClothError::GridTooSmall { .. } => {
+            SceneError::field(format!("{at}.cols"), e)
+        }
+        other => SceneError::from(other),
+    })?;
+    for &(row, col) in &c.pins.cells {
+        cloth
+            .pin_cell(row, col)
+            .map_err(|e| SceneError::field(format!("{at}.pins.cells"), e))?;
+    }
+    for (i, cut) in c.cuts.iter().enumerate() {
+        let field = || format!("{at}.cuts[{i}]");
+        let (cells, along_column) = cut
+            .cells(c.cols, c.rows)
+            .map_err(|e| SceneError::field(field(), e))?;
+        for (row, col) in cells {
+            // Across the cut: along the grid's rows for a cut down a
+            // column, along its columns for one across a row.
+            let (r2, c2) = match along_column {
+                true if col + 1 < c.cols => (row, col + 1),
+                true => (row, col - 1),
+                false if row + 1 < c.rows => (row + 1, col),
+                false => (row - 1, col),
+            };
+            let at = |r, c| cloth.index(r, c).map(|i| cloth.positions()[i]);
+            let normal = at(r2, c2)
+                .and_then(|p| Ok(p - at(row, col)?))
+                .map_err(|e| SceneError::field(field(), e))?;
+            let i = cloth
+                .index(row, col)
+                .map_err(|e| SceneError::field(field(), e))?;
+            cloth
+                .split_particle(i, normal)
+                .map_err(|e| SceneError::field(field(), e))?;
+        }
+    }
+    Ok(cloth)
 }

@@ -232,6 +232,7 @@ pub fn camera_for(scene: &Scene) -> OrbitCamera3d {
         SceneKind::Fold => (Vec3::new(0.55, 0.5, 1.45), Vec3::new(0.05, 0.2, 0.0)),
         // From the front and above, to look into the opening.
         SceneKind::Tear => (Vec3::new(0.45, 1.75, 1.55), Vec3::new(0.0, 0.85, 0.0)),
+        SceneKind::Stack => (Vec3::new(0.75, 0.75, 1.0), Vec3::new(0.0, 0.1, 0.0)),
     };
     OrbitCamera3d::new(eye, at)
 }

@@ -1,0 +1,143 @@
+//! Several cloths in one scene: joined into one simulated cloth, they meet
+//! through self-collision and never pass through each other.
+
+use cloth3d::collision::self_intersections;
+use cloth3d::metrics::pieces;
+use cloth3d::prelude::*;
+
+const SIDE: usize = 12;
+
+/// A 0.5 m square of cotton, flat at height `y`, turned `turn` radians
+/// about the vertical.
+fn square(y: f32, turn: f32) -> Cloth {
+    ClothBuilder::new(SIDE, SIDE)
+        .size(0.5, 0.5)
+        .pose(Pose::from_parts(
+            Vector::new(0.0, y, 0.0),
+            Rotation::from_rotation_y(turn),
+        ))
+        .self_collision(true)
+        .build()
+        .unwrap()
+}
+
+/// The ground: a wide box whose top is at y = 0.
+fn ground() -> Obstacle {
+    Obstacle::cuboid(
+        Vector::new(2.0, 0.5, 2.0),
+        Pose::from_translation(Vector::new(0.0, -0.5, 0.0)),
+    )
+}
+
+/// Drops two squares, the upper turned 45°, onto the ground for `frames`
+/// frames; returns the cloth and the most self-intersections of any frame.
+fn drop_two(self_collision: bool, frames: usize) -> (Cloth, usize) {
+    let mut cloth = Cloth::join(vec![square(0.05, 0.0), square(0.15, 0.785)]).unwrap();
+    cloth.params.self_collision = self_collision;
+    let mut solver = ClothSolver::default();
+    let obstacles = [ground()];
+    let mut worst = 0;
+    for _ in 0..frames {
+        solver.step(&mut cloth, 1.0 / 60.0, &obstacles).unwrap();
+        worst = worst.max(self_intersections(&cloth));
+    }
+    (cloth, worst)
+}
+
+/// Two cloths dropped one on the other onto the ground never cross: no
+/// self-intersection in any frame, and every particle of the upper cloth
+/// lies above the lower cloth wherever the lower one is under it. Without
+/// self-collision the same drop passes one through the other.
+#[test]
+fn two_cloths_dropped_on_each_other_never_cross() {
+    let (cloth, worst) = drop_two(true, 90);
+    assert!(cloth.is_finite());
+    assert_eq!(worst, 0, "the cloths crossed");
+    let x = cloth.positions();
+    let n = SIDE * SIDE;
+    let (lower, upper) = (&x[..n], &x[n..]);
+    let mut checked = 0;
+    let lower_triangles = &cloth.triangles()[..cloth.triangles().len() / 2];
+    for u in upper {
+        // The lower cloth's surface right under this particle, if any: its
+        // height interpolated over the triangle that covers it seen from above.
+        for t in lower_triangles {
+            let [a, b, c] = t.map(|i| x[i as usize]);
+            let (e1, e2, d) = (b - a, c - a, *u - a);
+            let det = e1.x * e2.z - e1.z * e2.x;
+            if det.abs() < 1e-12 {
+                continue;
+            }
+            let (s, r) = (
+                (d.x * e2.z - d.z * e2.x) / det,
+                (e1.x * d.z - e1.z * d.x) / det,
+            );
+            if s >= 0.0 && r >= 0.0 && s + r <= 1.0 {
+                let y = a.y + s * e1.y + r * e2.y;
+                checked += 1;
+                assert!(
+                    u.y > y + 0.002,
+                    "upper {u:?} is not above the lower cloth ({y})"
+                );
+            }
+        }
+    }
+    assert!(
+        checked > 50,
+        "only {checked} particles lie over the lower cloth"
+    );
+    // Both lie on the ground, the lower one flat on it.
+    assert!(
+        lower.iter().all(|p| p.y < 0.02),
+        "the lower cloth did not land"
+    );
+
+    let (_, crossings) = drop_two(false, 90);
+    assert!(crossings > 50, "without self-collision: {crossings}");
+}
+
+/// `Cloth::join`: particles, springs, triangles, masses and pins of each
+/// piece follow those of the pieces before, in order; the pieces stay
+/// apart (no spring between them).
+#[test]
+fn join_keeps_each_piece_and_numbers_them_in_order() {
+    let mut a = square(0.0, 0.0);
+    a.pin(3).unwrap();
+    let mut b = ClothBuilder::new(5, 4).build().unwrap();
+    b.pin(2).unwrap();
+    let (na, nb) = (a.particle_count(), b.particle_count());
+    let joined = Cloth::join(vec![a.clone(), b.clone()]).unwrap();
+    assert_eq!(joined.particle_count(), na + nb);
+    assert_eq!(
+        joined.springs().len(),
+        a.springs().len() + b.springs().len()
+    );
+    assert_eq!(
+        joined.triangles().len(),
+        a.triangles().len() + b.triangles().len()
+    );
+    assert_eq!(&joined.positions()[na..], b.positions());
+    assert!((joined.total_mass() - a.total_mass() - b.total_mass()).abs() < 1e-5);
+    assert_eq!(joined.pinned(), vec![3, na + 2]);
+    assert!(joined
+        .springs()
+        .iter()
+        .all(|s| ((s.a as usize) < na) == ((s.b as usize) < na)));
+    assert_eq!(pieces(&joined), 2);
+    assert!(joined.grid().is_none());
+    // One piece is itself.
+    assert_eq!(Cloth::join(vec![b.clone()]).unwrap(), b);
+    assert!(Cloth::join(vec![]).is_err());
+}
+
+/// Pieces of different materials are refused, naming the piece.
+#[test]
+fn join_refuses_pieces_of_another_material() {
+    let silk = ClothBuilder::new(4, 4)
+        .material(Material::silk())
+        .build()
+        .unwrap();
+    let err = Cloth::join(vec![square(0.0, 0.0), silk]).unwrap_err();
+    let text = err.to_string();
+    assert!(text.contains("silk") && text.contains("cotton"), "{text}");
+}
