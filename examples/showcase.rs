@@ -508,6 +508,7 @@ fn controls(window: &mut Window, app: &mut Showcase) {
                             .text("friction between layers"),
                     );
                 }
+                ui.checkbox(&mut cloth.params.tethers, "tethers to the pins");
                 ui.add(egui::Slider::new(&mut dt, 1.0 / 240.0..=1.0 / 20.0).text("dt (s)"));
                 let mut auto = solver.settings.substeps == Substeps::Auto;
                 let mut k = match solver.settings.substeps {

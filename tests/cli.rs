@@ -493,6 +493,31 @@ fn run_stack_keeps_its_cloths_apart_and_without_self_collision_they_cross() {
     assert!(off["self_intersections"].as_u64().unwrap() > 1000, "{off}");
 }
 
+/// `--tethers` holds the curtain from its rail: in the third of a second
+/// before the ball reaches it, it stretches less than without, and
+/// `--tethers=off` is the scene's default.
+#[test]
+fn the_tethers_flag_holds_the_curtain() {
+    let stretch = |extra: &[&str]| {
+        let mut args = vec!["run", "curtain", "--n", "32", "--frames", "20", "--json"];
+        args.extend_from_slice(extra);
+        let v: serde_json::Value = serde_json::from_str(cloth3d_ok(&args).trim()).unwrap();
+        v["max_stretch"].as_f64().unwrap()
+    };
+    let (with, without, off) = (
+        stretch(&["--tethers"]),
+        stretch(&[]),
+        stretch(&["--tethers=off"]),
+    );
+    assert!(
+        with < 0.5 * without,
+        "{with} with tethers, {without} without"
+    );
+    assert_eq!(without, off);
+    let out = cloth3d(&["run", "curtain", "--tethers=maybe"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
 #[test]
 fn self_collision_is_the_scenes_own_and_the_flag_turns_it_either_way() {
     // A short fold at a coarse grid: its halves meet under the bar by then.

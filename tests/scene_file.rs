@@ -200,8 +200,9 @@ fn a_file_turns_self_collision_on_with_its_thickness() {
     assert!(err.contains("cloth.self_thickness"), "{err}");
 }
 
-/// A file's cuts open slits before the cloth moves, and its material can
-/// tear; a cut that is no straight run of cells is refused, naming it.
+/// A file's cuts open slits before the cloth moves, its material can tear
+/// and its cloth can have tethers; a cut that is no straight run of cells
+/// is refused, naming it.
 #[test]
 fn a_file_cuts_slits_and_tears() {
     let cut = GOOD
@@ -215,6 +216,10 @@ fn a_file_cuts_slits_and_tears() {
         );
     let scene = Scene::from_desc(file::from_ron(&cut).unwrap()).unwrap();
     assert_eq!(scene.cloth.material.tear_strain, Some(0.2));
+    assert!(!scene.cloth.params.tethers);
+    let tethered = cut.replace("        cuts:", "        tethers: true,\n        cuts:");
+    let scene2 = Scene::from_desc(file::from_ron(&tethered).unwrap()).unwrap();
+    assert!(scene2.cloth.params.tethers);
     // Four particles split down column 3: four more, in one piece still
     // (the slit ends inside the cloth).
     assert_eq!(scene.cloth.particle_count(), 64 + 4);

@@ -38,6 +38,11 @@ pub struct SceneArgs {
     /// `=on`) turns it on, `--self-collision=off` off (default: the scene's).
     #[arg(long, value_name = "on|off", num_args = 0..=1, require_equals = true, default_missing_value = "on", value_parser = parse_on_off)]
     pub self_collision: Option<bool>,
+    /// Tethers: every free particle stays within its rest distance of the
+    /// nearest pin: `--tethers` (or `=on`) on, `--tethers=off` off
+    /// (default: the scene's).
+    #[arg(long, value_name = "on|off", num_args = 0..=1, require_equals = true, default_missing_value = "on", value_parser = parse_on_off)]
+    pub tethers: Option<bool>,
     /// Linearisations (Newton iterations) per substep (implicit-euler).
     #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
     pub newton_iterations: Option<u32>,
@@ -72,6 +77,7 @@ impl SceneArgs {
             frames: self.frames,
             friction: self.friction,
             self_collision: self.self_collision,
+            tethers: self.tethers,
             solver: SolverTuning {
                 newton_iterations: self.newton_iterations,
                 cg_iterations: self.cg_iterations,

@@ -144,6 +144,12 @@ impl ClothBuilder {
         self
     }
 
+    /// Tethers on or off (see [`PhysicsParams::tethers`]).
+    pub fn tethers(mut self, on: bool) -> Self {
+        self.params.tethers = on;
+        self
+    }
+
     /// Checks everything and builds the cloth.
     pub fn build(self) -> Result<Cloth, ClothError> {
         let (cols, rows) = (self.cols, self.rows);

@@ -65,6 +65,16 @@ pub struct PhysicsParams {
     /// stretch spring ([`crate::cloth::Cloth::self_thickness`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub self_thickness: Option<f32>,
+    /// Tethers (long-range attachments): every free particle stays within
+    /// its rest distance, through the mesh, of the nearest pinned particle,
+    /// so a pinned cloth does not stretch under its own weight (off by
+    /// default).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub tethers: bool,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 fn default_self_friction() -> f32 {
@@ -81,6 +91,7 @@ impl Default for PhysicsParams {
             self_collision: false,
             self_friction: default_self_friction(),
             self_thickness: None,
+            tethers: false,
         }
     }
 }

@@ -144,6 +144,11 @@ pub struct ClothDesc {
         deserialize_with = "crate::error::de::opt_positive"
     )]
     pub self_thickness: Option<f32>,
+    /// Tethers: every free particle stays within its rest distance, through
+    /// the mesh, of the nearest pinned particle (off by default; on for all
+    /// of a scene's cloths when any of them has it).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub tethers: bool,
     /// Cuts made before the cloth moves: each splits the particles of a
     /// straight run of grid cells across the run, so the cloth starts with
     /// a slit there (a tear starts at its ends).
@@ -668,6 +673,7 @@ impl ClothDesc {
             pins: PinsDesc::default(),
             self_collision: false,
             self_thickness: None,
+            tethers: false,
             cuts: Vec::new(),
         }
     }

@@ -29,6 +29,8 @@ pub struct SceneOptions {
     pub friction: Option<f32>,
     /// Keep the cloth from passing through itself (default: the scene's).
     pub self_collision: Option<bool>,
+    /// Tethers to the pins (default: the scene's).
+    pub tethers: Option<bool>,
     /// The solver's iterations and tolerances.
     pub solver: SolverTuning,
 }
@@ -70,6 +72,9 @@ impl SceneDesc {
             }
             if let Some(on) = options.self_collision {
                 cloth.self_collision = on;
+            }
+            if let Some(on) = options.tethers {
+                cloth.tethers = on;
             }
         }
         if let Some(i) = options.integrator {

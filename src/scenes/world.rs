@@ -127,8 +127,8 @@ impl Scene {
         for (i, c) in desc.cloths.iter().enumerate() {
             pieces.push(build_cloth(c, &format!("cloths[{i}]"))?);
         }
-        let self_collision =
-            desc.cloth.self_collision || desc.cloths.iter().any(|c| c.self_collision);
+        let any = |on: fn(&ClothDesc) -> bool| on(&desc.cloth) || desc.cloths.iter().any(on);
+        let (self_collision, tethers) = (any(|c| c.self_collision), any(|c| c.tethers));
         let mut cloth = Cloth::join(pieces).map_err(|e| match e {
             ClothError::InvalidTopology { index, .. } => {
                 SceneError::field(format!("cloths[{}].material", index - 1), e)
@@ -141,6 +141,7 @@ impl Scene {
         cloth.params.air_drag = desc.air_drag;
         cloth.params.thickness = desc.thickness;
         cloth.params.self_collision = self_collision;
+        cloth.params.tethers = tethers;
         cloth.params.self_friction = desc.friction;
         cloth.params.self_thickness = c.self_thickness;
         cloth.params.validate()?;

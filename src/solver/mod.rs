@@ -27,6 +27,7 @@ mod substep;
 mod substeps;
 mod symplectic_euler;
 mod tearing;
+mod tethers;
 mod verlet;
 mod workspace;
 mod xpbd;

@@ -8,7 +8,7 @@
 //!               it: a fresh look every few substeps, a pass every
 //!               substep) → stretch limit (solvers that do not hold it in
 //!               their own substep, and every solver with self-collision)
-//!               → resolve contacts (with the friction policy the
+//!               → tethers (cloths with them) → resolve contacts (with the friction policy the
 //!               integrator handed back)
 //! divergence check → roll back and report, or commit the time
 //!     → tearing (cloths whose material tears: split the particles at the
@@ -90,6 +90,9 @@ impl ClothSolver {
             candidate_margin(cloth, dt),
             &cloth.topology.springs,
         );
+        if cloth.params.tethers {
+            ws.tethers.update(cloth);
+        }
         if cloth.params.self_collision {
             ws.self_contacts.begin_step(
                 &cloth.particles,
@@ -227,6 +230,11 @@ impl ClothSolver {
                     Some(&mut p.v),
                     cloth.material.stretch_limit_factor(),
                 );
+            }
+            // Tethers: after the springs and the limit (they hold what those
+            // let through), before the contacts (which win).
+            if cloth.params.tethers {
+                ws.tethers.hold(&mut cloth.particles);
             }
             // Resolve contacts, by the friction policy the integrator handed back.
             report.contacts += ws.collision.resolve(

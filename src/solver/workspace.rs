@@ -6,6 +6,7 @@
 use super::fast_mass_spring::FastMassSpringState;
 use super::implicit_euler::ImplicitState;
 use super::tearing::Tearing;
+use super::tethers::Tethers;
 use super::xpbd::XpbdScratch;
 use crate::collision::{CollisionStage, SelfContacts};
 use crate::math::Vector;
@@ -39,6 +40,8 @@ pub(crate) struct Workspace {
     pub self_contacts: SelfContacts,
     /// The tearing stage: its scratch and the last step's tears.
     pub tearing: Tearing,
+    /// The tethers of the cloth last stepped (rebuilt when its pins change).
+    pub tethers: Tethers,
 }
 
 impl Workspace {
