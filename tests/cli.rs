@@ -22,6 +22,8 @@ fn run_json_prints_exactly_one_object_with_every_metric() {
         "self_intersections_any_frame",
         "torn_springs",
         "pieces",
+        "asleep",
+        "asleep_frames",
         "min_y",
         "centroid",
         "finite",
@@ -516,6 +518,27 @@ fn the_tethers_flag_holds_the_curtain() {
     assert_eq!(without, off);
     let out = cloth3d(&["run", "curtain", "--tethers=maybe"]);
     assert_eq!(out.status.code(), Some(2));
+}
+
+/// `--sleep`: a settled drape sleeps through the end of a long run, and
+/// the run says for how many frames; without it, it never sleeps.
+#[test]
+fn the_sleep_flag_lets_a_settled_drape_sleep() {
+    let run = |extra: &[&str]| {
+        let mut args = vec!["run", "drape", "--n", "24", "--frames", "900", "--json"];
+        args.extend_from_slice(extra);
+        let v: serde_json::Value = serde_json::from_str(cloth3d_ok(&args).trim()).unwrap();
+        v
+    };
+    let on = run(&["--sleep"]);
+    assert_eq!(on["asleep"], true, "{on}");
+    assert!(on["asleep_frames"].as_u64().unwrap() > 100, "{on}");
+    assert_eq!(on["solver"]["sleep"], true, "{on}");
+    let off = run(&[]);
+    assert_eq!(
+        (off["asleep"].as_bool(), off["asleep_frames"].as_u64()),
+        (Some(false), Some(0))
+    );
 }
 
 #[test]

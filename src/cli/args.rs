@@ -43,6 +43,10 @@ pub struct SceneArgs {
     /// (default: the scene's).
     #[arg(long, value_name = "on|off", num_args = 0..=1, require_equals = true, default_missing_value = "on", value_parser = parse_on_off)]
     pub tethers: Option<bool>,
+    /// Let a still cloth sleep (not stepped until something near it moves):
+    /// `--sleep` (or `=on`) on, `--sleep=off` off (default: the scene's).
+    #[arg(long, value_name = "on|off", num_args = 0..=1, require_equals = true, default_missing_value = "on", value_parser = parse_on_off)]
+    pub sleep: Option<bool>,
     /// Linearisations (Newton iterations) per substep (implicit-euler).
     #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
     pub newton_iterations: Option<u32>,
@@ -79,6 +83,7 @@ impl SceneArgs {
             self_collision: self.self_collision,
             tethers: self.tethers,
             solver: SolverTuning {
+                sleep: self.sleep,
                 newton_iterations: self.newton_iterations,
                 cg_iterations: self.cg_iterations,
                 cg_tolerance: self.cg_tolerance,

@@ -52,6 +52,8 @@ pub struct SolverTuning {
     pub xpbd_iterations: Option<u32>,
     /// Keep stretch and shear springs out of obstacles too.
     pub edge_collisions: Option<bool>,
+    /// Let a still cloth sleep.
+    pub sleep: Option<bool>,
 }
 
 impl SceneDesc {
@@ -115,6 +117,9 @@ impl SceneDesc {
         }
         if let Some(edges) = tuning.edge_collisions {
             settings.edge_collisions = edges;
+        }
+        if let Some(sleep) = tuning.sleep {
+            settings.sleep = sleep;
         }
         settings.validate()?;
         if let Some(f) = options.frames {

@@ -54,6 +54,12 @@ pub struct RunMetrics {
     /// tear strain, as the `tear` scene's has).
     #[serde(default)]
     pub torn_springs: u64,
+    /// True when the cloth slept through the final frame (with sleeping on).
+    #[serde(default)]
+    pub asleep: bool,
+    /// Frames the cloth slept through.
+    #[serde(default)]
+    pub asleep_frames: u32,
     /// Pieces the cloth is in on the final frame (1 for a whole cloth;
     /// see [`crate::metrics::pieces`]).
     #[serde(default = "one")]
@@ -108,6 +114,7 @@ pub fn run_with(
     let mut deepest_any = 0.0f32;
     let mut crossings_any = 0;
     let mut torn = 0u64;
+    let (mut asleep, mut asleep_frames) = (false, 0);
     for f in 0..frames {
         let start = Instant::now();
         let report = scene.step_frame()?;
@@ -116,6 +123,8 @@ pub fn run_with(
         max_substeps = max_substeps.max(report.substeps);
         iterations += report.iterations as u64;
         torn += report.torn_springs as u64;
+        asleep = report.asleep;
+        asleep_frames += u32::from(report.asleep);
         let deepest = scene.max_penetration();
         deepest_any = deepest_any.max(deepest);
         crossings_any = crossings_any.max(self_intersections(&scene.cloth));
@@ -153,6 +162,8 @@ pub fn run_with(
         self_intersections: self_intersections(cloth),
         self_intersections_any_frame: crossings_any,
         torn_springs: torn,
+        asleep,
+        asleep_frames,
         pieces: pieces(cloth),
         min_y,
         centroid: [c.x, c.y, c.z],

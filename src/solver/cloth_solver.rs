@@ -111,6 +111,18 @@ impl ClothSolver {
         &self.workspace.tearing.events
     }
 
+    /// True while the cloth this solver steps sleeps (see
+    /// [`SolverSettings::sleep`]).
+    pub fn is_asleep(&self) -> bool {
+        self.state.sleep.is_asleep()
+    }
+
+    /// Wakes the cloth: the next step solves it again (for a change the
+    /// solver cannot see, such as a particle moved with `set_position`).
+    pub fn wake(&mut self) {
+        self.state.sleep.wake();
+    }
+
     /// What the solver has done since it was made (or cloned).
     pub fn counters(&self) -> SolverCounters {
         SolverCounters {

@@ -28,6 +28,10 @@ pub struct StepReport {
     /// material has a tear strain); see [`crate::solver::ClothSolver::tear_events`].
     #[serde(default)]
     pub torn_springs: u32,
+    /// True when the cloth slept through the step (nothing was solved; see
+    /// `SolverSettings::sleep`).
+    #[serde(default)]
+    pub asleep: bool,
 }
 
 /// What a solver has done since it was made.

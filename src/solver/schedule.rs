@@ -1,18 +1,21 @@
 //! The step schedule: the stages of one step, in the one order they run.
 //!
 //! ```text
-//! validate → substeps k, h = dt / k → back up → obstacle bounds over the step
+//! validate → asleep (sleeping on, nothing near moved or changed)? → commit
+//!     the time and report, nothing solved
+//! → substeps k, h = dt / k → back up → obstacle bounds over the step
 //!     → candidates per particle → a team of threads for the substeps
 //! per substep:  obstacle motion → contact detection (solvers that solve
 //!               contacts) → integrate → self-collision (cloths that have
 //!               it: a fresh look every few substeps, a pass every
 //!               substep) → stretch limit (solvers that do not hold it in
 //!               their own substep, and every solver with self-collision)
-//!               → tethers (cloths with them) → resolve contacts (with the friction policy the
-//!               integrator handed back)
+//!               → tethers (cloths with them) → resolve contacts (with the
+//!               friction policy the integrator handed back)
 //! divergence check → roll back and report, or commit the time
 //!     → tearing (cloths whose material tears: split the particles at the
 //!       ends of overstrained stretch springs)
+//!     → sleep (sleeping on: still for 30 steps? then asleep)
 //! ```
 //!
 //! The stages' loops over particles, bands and springs run on the team
@@ -65,6 +68,22 @@ impl ClothSolver {
                     body: format!("obstacle {i}"),
                 });
             }
+        }
+        // A sleeping cloth stays as it is unless something could move it.
+        if !self.settings.sleep {
+            self.state.sleep.wake();
+        } else if self.state.sleep.stays_asleep(cloth, obstacles) {
+            // No contact this step: no momentum for the obstacles.
+            let n = cloth.particle_count();
+            self.workspace
+                .collision
+                .begin_step(obstacles, dt, cloth.params.thickness, n);
+            cloth.time += dt as f64;
+            self.steps += 1;
+            return Ok(StepReport {
+                asleep: true,
+                ..Default::default()
+            });
         }
         let k = self.substeps_for(cloth, dt);
         if cloth.params.self_collision && dt / k as f32 > MAX_SELF_SUBSTEP {
@@ -122,6 +141,9 @@ impl ClothSolver {
         cloth.time += dt as f64;
         self.steps += 1;
         report.torn_springs = self.workspace.tearing.run(cloth);
+        if self.settings.sleep {
+            self.state.sleep.after_step(cloth);
+        }
         Ok(report)
     }
 

@@ -49,6 +49,10 @@ pub struct SolverSettings {
     /// Evaluate spring forces on several threads (with the `parallel` feature;
     /// ignored without it). The results are bit-identical either way.
     pub parallel: bool,
+    /// Let a still cloth fall asleep: after 30 steps with every particle
+    /// slower than 3 cm/s (Jolt's default for bodies) it is no longer stepped until something could
+    /// move it (`sleep.rs`). Off by default.
+    pub sleep: bool,
 }
 
 impl Default for SolverSettings {
@@ -64,6 +68,7 @@ impl Default for SolverSettings {
             xpbd_iterations: 2,
             edge_collisions: true,
             parallel: true,
+            sleep: false,
         }
     }
 }

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::sleep::SleepState;
 use crate::math::Vector;
 
 /// What a solver carries from one substep to the next.
@@ -14,4 +15,7 @@ pub struct SolverState {
     /// friction cone. Empty until that solver runs.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub(crate) held_force: Vec<Vector>,
+    /// Whether the cloth sleeps (with `SolverSettings::sleep`).
+    #[serde(default, skip_serializing_if = "SleepState::is_awake")]
+    pub(crate) sleep: SleepState,
 }
