@@ -509,6 +509,11 @@ fn controls(window: &mut Window, app: &mut Showcase) {
                     );
                 }
                 ui.checkbox(&mut cloth.params.tethers, "tethers to the pins");
+                let asleep = if solver.is_asleep() { " (asleep)" } else { "" };
+                ui.checkbox(
+                    &mut solver.settings.sleep,
+                    format!("sleep when still{asleep}"),
+                );
                 ui.add(egui::Slider::new(&mut dt, 1.0 / 240.0..=1.0 / 20.0).text("dt (s)"));
                 let mut auto = solver.settings.substeps == Substeps::Auto;
                 let mut k = match solver.settings.substeps {

@@ -58,8 +58,8 @@ pub use solver::{ClothSolver, Integrator, Preconditioner, SolverSettings, StepRe
 /// Everything a typical user needs, in one import.
 pub mod prelude {
     pub use crate::cloth::{
-        Cloth, ClothBuilder, Energy, Material, ParticleSplit, PhysicsParams, PinPreset, Spring,
-        SpringKind, SpringParams, Wind,
+        Cloth, ClothBuilder, ClothMesh, Energy, MassSpec, Material, ParticleSplit, PhysicsParams,
+        PinPreset, Spring, SpringKind, SpringParams, Wind,
     };
     pub use crate::collision::Obstacle;
     pub use crate::error::ClothError;

@@ -8,6 +8,8 @@ pub mod desc;
 mod error;
 #[cfg(feature = "scene-files")]
 pub mod file;
+#[cfg(feature = "scene-files")]
+pub mod mesh_file;
 mod options;
 mod run;
 mod world;

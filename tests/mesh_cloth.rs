@@ -1,0 +1,145 @@
+//! Cloth of any shape: built from a polygon mesh, with springs along its
+//! sides, across its quads and across its interior sides, masses from its
+//! areas, and texture coordinates kept.
+
+use cloth3d::prelude::*;
+
+/// A 3 × 3 vertex sheet of four unit quads in the x–z plane.
+fn four_quads() -> ClothMesh {
+    let positions = (0..9)
+        .map(|i| Vector::new((i % 3) as f32, 0.0, (i / 3) as f32))
+        .collect();
+    let quad = |r: u32, c: u32| {
+        let i = r * 3 + c;
+        vec![i, i + 3, i + 4, i + 1]
+    };
+    ClothMesh {
+        positions,
+        faces: vec![quad(0, 0), quad(0, 1), quad(1, 0), quad(1, 1)],
+        uvs: (0..9)
+            .map(|i| [(i % 3) as f32 / 2.0, (i / 3) as f32 / 2.0])
+            .collect(),
+    }
+}
+
+fn count(cloth: &Cloth, kind: SpringKind) -> usize {
+    cloth.springs().count(kind)
+}
+
+/// Four quads: 12 sides (stretch), 8 diagonals (shear), one bend across
+/// each of the 4 interior sides; a third of each triangle's area per corner.
+#[test]
+fn a_quad_mesh_gets_the_springs_of_a_grid_and_masses_from_its_areas() {
+    let cloth = Cloth::from_mesh(&four_quads(), Material::cotton(), MassSpec::Total(4.0)).unwrap();
+    assert_eq!(cloth.particle_count(), 9);
+    assert_eq!(cloth.triangles().len(), 8);
+    assert_eq!(count(&cloth, SpringKind::Stretch), 12);
+    assert_eq!(count(&cloth, SpringKind::Shear), 8);
+    assert_eq!(count(&cloth, SpringKind::Bend), 4);
+    // The bends join the corners facing each interior side: (1, 7) across
+    // the vertical sides through the middle, (3, 5) across the horizontal.
+    let bends: Vec<(u32, u32)> = cloth
+        .springs()
+        .iter()
+        .filter(|s| s.kind == SpringKind::Bend)
+        .map(|s| (s.a.min(s.b), s.a.max(s.b)))
+        .collect();
+    assert!(
+        bends.iter().all(|&(a, b)| {
+            let rest = (cloth.positions()[b as usize] - cloth.positions()[a as usize]).length();
+            rest > 1.0
+        }),
+        "{bends:?}"
+    );
+    // Masses: 4 kg over 4 m²; the middle vertex has four quads' worth of
+    // triangles, a corner one triangle of one quad.
+    let m = cloth.masses();
+    assert!((m.iter().sum::<f32>() - 4.0).abs() < 1e-5);
+    assert!((m[4] - 1.0).abs() < 1e-5, "{}", m[4]);
+    assert!(m[0] > 0.1 && m[0] < m[1] && m[1] < m[4], "{m:?}");
+    assert_eq!(cloth.uvs()[8], [1.0, 1.0]);
+    // It steps like any cloth.
+    let mut sim = Simulation::new(cloth);
+    sim.pin(0).unwrap();
+    for _ in 0..30 {
+        sim.step(1.0 / 60.0, &[]).unwrap();
+    }
+    assert!(sim.is_finite() && sim.positions()[8].y < -0.1);
+}
+
+/// A triangle mesh: every side a stretch spring, a bend across each
+/// interior side, no shear.
+#[test]
+fn a_triangle_mesh_gets_stretch_and_bend_springs() {
+    let mut mesh = four_quads();
+    mesh.faces = mesh
+        .faces
+        .iter()
+        .flat_map(|q| [vec![q[0], q[1], q[2]], vec![q[0], q[2], q[3]]])
+        .collect();
+    let cloth = Cloth::from_mesh(&mesh, Material::cotton(), MassSpec::FromDensity).unwrap();
+    assert_eq!(count(&cloth, SpringKind::Stretch), 16);
+    assert_eq!(count(&cloth, SpringKind::Shear), 0);
+    // 16 sides, 8 on the border: 8 interior sides.
+    assert_eq!(count(&cloth, SpringKind::Bend), 8);
+    assert!((cloth.total_mass() - 4.0 * Material::cotton().density).abs() < 1e-5);
+}
+
+/// Bad meshes are refused with the face or vertex named.
+#[test]
+fn a_bad_mesh_is_refused() {
+    let mut mesh = four_quads();
+    mesh.faces.push(vec![0, 1, 9]);
+    let err = Cloth::from_mesh(&mesh, Material::cotton(), MassSpec::FromDensity).unwrap_err();
+    assert!(err.to_string().contains("face 4"), "{err}");
+    let mut mesh = four_quads();
+    mesh.faces[0] = vec![0, 3, 3, 1];
+    assert!(Cloth::from_mesh(&mesh, Material::cotton(), MassSpec::FromDensity).is_err());
+    let mut mesh = four_quads();
+    mesh.faces[0] = vec![0, 3, 4, 1, 2];
+    let err = Cloth::from_mesh(&mesh, Material::cotton(), MassSpec::FromDensity).unwrap_err();
+    assert!(err.to_string().contains("triangles and quads"), "{err}");
+    let mut mesh = four_quads();
+    mesh.positions.push(Vector::new(5.0, 0.0, 0.0));
+    mesh.uvs.push([0.0, 0.0]);
+    let err = Cloth::from_mesh(&mesh, Material::cotton(), MassSpec::FromDensity).unwrap_err();
+    assert!(err.to_string().contains("vertex 9"), "{err}");
+    let mut mesh = four_quads();
+    mesh.uvs.pop();
+    assert!(Cloth::from_mesh(&mesh, Material::cotton(), MassSpec::FromDensity).is_err());
+}
+
+/// An OBJ file's quads and triangles, texture coordinates and objects come
+/// through the reader (tobj) as the mesh; a file with no face is refused.
+#[cfg(feature = "scene-files")]
+#[test]
+fn an_obj_file_reads_as_a_cloth_mesh() {
+    use cloth3d::scenes::mesh_file::obj_mesh;
+    let text = "\
+o banner
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 2 0.5 0
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+vt 1 0.5
+f 1/1 2/2 3/3 4/4
+f 2/2 5/5 3/3
+";
+    let mesh = obj_mesh(text, "banner.obj").unwrap();
+    assert_eq!(mesh.positions.len(), 5);
+    assert_eq!(mesh.faces, vec![vec![0, 1, 2, 3], vec![1, 4, 2]]);
+    assert_eq!(mesh.uvs[2], [1.0, 0.0]);
+    let cloth = Cloth::from_mesh(&mesh, Material::cotton(), MassSpec::FromDensity).unwrap();
+    // Sides: 4 of the quad and 2 more of the triangle; the quad's two
+    // diagonals; one bend across the shared side (1, 2).
+    assert_eq!(count(&cloth, SpringKind::Stretch), 6);
+    assert_eq!(count(&cloth, SpringKind::Shear), 2);
+    assert_eq!(count(&cloth, SpringKind::Bend), 1);
+    let err = obj_mesh("v 0 0 0\n", "empty.obj").unwrap_err();
+    assert!(err.to_string().contains("empty.obj"), "{err}");
+}
