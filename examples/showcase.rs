@@ -179,7 +179,8 @@ async fn interactive(source: String, options: SceneOptions) {
     let font = Font::default();
     let mut cursor = Vec2::ZERO;
     let mut last_frame = std::time::Instant::now();
-    let default_wind = Wind::new(Vector::new(1.0, 0.0, 0.3), 8.0);
+    // The flag's breeze.
+    let default_wind = Wind::new(Vector::new(1.0, 0.0, 0.3), 8.0).with_air(3.6, 0.2, 0.4, 7);
     while window.render_3d(&mut root, &mut app.camera).await {
         app.frame_ms = last_frame.elapsed().as_secs_f64() * 1000.0;
         last_frame = std::time::Instant::now();
@@ -471,6 +472,20 @@ fn controls(window: &mut Window, app: &mut Showcase) {
                     egui::Slider::new(&mut cloth.params.wind.strength, 0.0..=40.0)
                         .text("wind (N/m²)"),
                 );
+                ui.add(
+                    egui::Slider::new(&mut cloth.params.wind.speed, 0.0..=15.0)
+                        .text("air speed (m/s; 0: pressure only)"),
+                );
+                if cloth.params.wind.speed > 0.0 {
+                    ui.add(
+                        egui::Slider::new(&mut cloth.params.wind.friction, 0.0..=1.0)
+                            .text("skin friction"),
+                    );
+                    ui.add(
+                        egui::Slider::new(&mut cloth.params.wind.turbulence, 0.0..=1.0)
+                            .text("gusts"),
+                    );
+                }
                 let mut heading = cloth
                     .params
                     .wind

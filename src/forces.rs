@@ -51,6 +51,69 @@ pub fn wind_force_on_triangle(p0: Vector, p1: Vector, p2: Vector, wind: &Wind) -
     n * (wind.strength * 0.5 * twice_area * n.dot(dir))
 }
 
+/// The air's velocity (m/s) at `at` (m) and time `t` (s) of a wind with a
+/// speed: its direction at its speed, varied by its gusts.
+pub fn air_velocity(wind: &Wind, at: Vector, t: f32) -> Vector {
+    let Some(dir) = wind.direction.try_normalize() else {
+        return Vector::ZERO;
+    };
+    if wind.turbulence == 0.0 {
+        return dir * wind.speed;
+    }
+    // Three gust waves travelling downwind at the air's speed, and three
+    // across it; phases from the seed.
+    let downwind = at.dot(dir);
+    let side = dir.cross(Vector::Y).try_normalize().unwrap_or(Vector::X);
+    let across = at.dot(side);
+    let phase = |k: u32| {
+        let h = (wind.seed ^ k.wrapping_mul(0x9e37_79b9)).wrapping_mul(0x85eb_ca6b);
+        (h >> 8) as f32 / (1u32 << 24) as f32 * std::f32::consts::TAU
+    };
+    let tau = std::f32::consts::TAU;
+    let mut along = 0.0;
+    let mut sideways = 0.0;
+    for (k, (freq, amp)) in [(0.4f32, 0.5f32), (1.1, 0.3), (2.9, 0.2)]
+        .iter()
+        .enumerate()
+    {
+        let travel = t - downwind / wind.speed.max(0.1);
+        along += amp * (tau * freq * travel + phase(k as u32)).sin();
+        sideways += amp * (tau * freq * 1.3 * travel + 2.0 * across + phase(k as u32 + 3)).sin();
+    }
+    dir * (wind.speed * (1.0 + wind.turbulence * along))
+        + side * (0.5 * wind.speed * wind.turbulence * sideways)
+}
+
+/// Total wind force (N) on a triangle moving at `velocity` (m/s) at time
+/// `t` (s): with an air speed, the law of [`Wind`] on the air's velocity
+/// relative to the triangle; without, [`wind_force_on_triangle`].
+#[inline]
+pub fn wind_force_on_moving_triangle(
+    [p0, p1, p2]: [Vector; 3],
+    velocity: Vector,
+    wind: &Wind,
+    t: f32,
+) -> Vector {
+    if wind.speed <= 0.0 {
+        return wind_force_on_triangle(p0, p1, p2, wind);
+    }
+    let cross = (p1 - p0).cross(p2 - p0);
+    let twice_area = cross.length();
+    if twice_area <= f32::MIN_POSITIVE {
+        return Vector::ZERO;
+    }
+    let n = cross / twice_area;
+    let u = air_velocity(wind, (p0 + p1 + p2) / 3.0, t) - velocity;
+    let speed2 = u.length_squared();
+    if speed2 <= f32::MIN_POSITIVE {
+        return Vector::ZERO;
+    }
+    let u_hat = u / speed2.sqrt();
+    let pressure = wind.strength * speed2 / (wind.speed * wind.speed);
+    let normal = n.dot(u_hat);
+    (n * normal + (u_hat - n * normal) * wind.friction) * (pressure * 0.5 * twice_area)
+}
+
 /// Below this many springs a colour class is evaluated on one thread.
 const PARALLEL_MIN: usize = 4096;
 
@@ -147,14 +210,22 @@ fn parallel_class(
     });
 }
 
-/// Adds the wind force of every triangle into `f`.
-pub(crate) fn add_wind_forces(triangles: &[[u32; 3]], wind: &Wind, x: &[Vector], f: &mut [Vector]) {
+/// Adds the wind force of every triangle, moving at its corners' mean
+/// velocity `v`, at time `t` (s), into `f`.
+pub(crate) fn add_wind_forces(
+    triangles: &[[u32; 3]],
+    wind: &Wind,
+    (x, v): (&[Vector], &[Vector]),
+    t: f32,
+    f: &mut [Vector],
+) {
     if wind.is_calm() {
         return;
     }
-    for t in triangles {
-        let [i, j, k] = t.map(|i| i as usize);
-        let share = wind_force_on_triangle(x[i], x[j], x[k], wind) / 3.0;
+    for tri in triangles {
+        let [i, j, k] = tri.map(|i| i as usize);
+        let velocity = (v[i] + v[j] + v[k]) / 3.0;
+        let share = wind_force_on_moving_triangle([x[i], x[j], x[k]], velocity, wind, t) / 3.0;
         f[i] += share;
         f[j] += share;
         f[k] += share;
@@ -173,6 +244,8 @@ pub(crate) struct ForceModel<'a> {
     pub gravity: Vector,
     pub air_drag: f32,
     pub wind: Wind,
+    /// Time the forces are taken at, in seconds (for the wind's gusts).
+    pub time: f32,
     /// The threads that may evaluate spring forces.
     pub team: Team<'a>,
 }
@@ -216,8 +289,15 @@ impl<'a> ForceModel<'a> {
             gravity: physics.gravity,
             air_drag: physics.air_drag,
             wind: physics.wind,
+            time: 0.0,
             team,
         }
+    }
+
+    /// The same model taken at time `t` seconds (the wind's gusts).
+    pub fn at(mut self, t: f32) -> Self {
+        self.time = t;
+        self
     }
 
     /// Total force on every particle, in newtons, written into `f`.
@@ -226,7 +306,7 @@ impl<'a> ForceModel<'a> {
             f[i] = (self.gravity - v[i] * self.air_drag) * self.mass[i];
         }
         add_spring_forces(self.springs, &self.spring_params, (x, v), f, self.team);
-        add_wind_forces(self.triangles, &self.wind, x, f);
+        add_wind_forces(self.triangles, &self.wind, (x, v), self.time, f);
     }
 
     /// Acceleration of every particle, in m/s², written into `a`; zero for pinned particles.
@@ -258,7 +338,8 @@ impl Cloth {
             Masses::of(&self.particles),
             &self.params,
             Team::ALONE,
-        );
+        )
+        .at(self.time as f32);
         model.forces(&self.particles.x, &self.particles.v, f);
     }
 }

@@ -541,6 +541,26 @@ fn the_sleep_flag_lets_a_settled_drape_sleep() {
     );
 }
 
+/// `--wind-speed 0` gives the flag the plain pressure law, under which it
+/// hangs nearer its pole; bad wind values are refused.
+#[test]
+fn the_wind_flags_change_the_flags_wind() {
+    let centroid_x = |extra: &[&str]| {
+        let mut args = vec!["run", "flag", "--frames", "240", "--json"];
+        args.extend_from_slice(extra);
+        let v: serde_json::Value = serde_json::from_str(cloth3d_ok(&args).trim()).unwrap();
+        v["centroid"][0].as_f64().unwrap()
+    };
+    let (flying, plain) = (centroid_x(&[]), centroid_x(&["--wind-speed", "0"]));
+    assert!(
+        flying > plain + 0.1,
+        "{flying} flying, {plain} with the plain law"
+    );
+    assert_eq!(centroid_x(&["--turbulence", "0.4"]), flying);
+    let out = cloth3d(&["run", "flag", "--turbulence", "-1"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
 #[test]
 fn self_collision_is_the_scenes_own_and_the_flag_turns_it_either_way() {
     // A short fold at a coarse grid: its halves meet under the bar by then.

@@ -1,6 +1,6 @@
 //! Force laws: internal forces balance, wind acts along the normal.
 
-use cloth3d::forces::{spring_force, wind_force_on_triangle};
+use cloth3d::forces::{spring_force, wind_force_on_moving_triangle, wind_force_on_triangle};
 use cloth3d::prelude::*;
 
 /// A cloth with scrambled positions and velocities, no external force.
@@ -134,5 +134,46 @@ fn wind_moves_a_free_cloth_along_the_normal_component() {
     assert!(
         c.x.abs() < 1e-3 * c.z.abs().max(1.0),
         "moved sideways: {c:?}"
+    );
+}
+
+/// With an air speed the law acts on the air's velocity relative to the
+/// triangle: still, it is the plain law; moving with the air, nothing;
+/// moving against it at the air's speed, four times the pressure; edge-on,
+/// only the skin friction, along the wind.
+#[test]
+fn wind_acts_on_the_air_relative_to_the_triangle() {
+    // A unit right triangle in the x–y plane facing +z: area 0.5 m².
+    let p = [Vector::ZERO, Vector::X, Vector::Y];
+    let wind = Wind::new(Vector::Z, 8.0).with_air(4.0, 0.2, 0.0, 1);
+    let still = wind_force_on_moving_triangle(p, Vector::ZERO, &wind, 0.0);
+    assert!(
+        (still - Vector::new(0.0, 0.0, 4.0)).length() < 1e-5,
+        "{still:?}"
+    );
+    let along = wind_force_on_moving_triangle(p, Vector::new(0.0, 0.0, 4.0), &wind, 0.0);
+    assert!(along.length() < 1e-5, "{along:?}");
+    let against = wind_force_on_moving_triangle(p, Vector::new(0.0, 0.0, -4.0), &wind, 0.0);
+    assert!(
+        (against - Vector::new(0.0, 0.0, 16.0)).length() < 1e-4,
+        "{against:?}"
+    );
+    // Edge-on: the wind along x over a triangle facing +z.
+    let edge_on = Wind::new(Vector::X, 8.0).with_air(4.0, 0.2, 0.0, 1);
+    let skin = wind_force_on_moving_triangle(p, Vector::ZERO, &edge_on, 0.0);
+    assert!(
+        (skin - Vector::new(0.8, 0.0, 0.0)).length() < 1e-5,
+        "{skin:?}"
+    );
+    // Gusts vary the force in time, the same way every run.
+    let gusty = Wind::new(Vector::Z, 8.0).with_air(4.0, 0.2, 0.5, 7);
+    let at = |t| wind_force_on_moving_triangle(p, Vector::ZERO, &gusty, t);
+    assert_ne!(at(0.0), at(0.5));
+    assert_eq!(at(0.5), at(0.5));
+    // Without an air speed the law ignores the motion, as before.
+    let plain = Wind::new(Vector::Z, 8.0);
+    assert_eq!(
+        wind_force_on_moving_triangle(p, Vector::new(0.0, 0.0, 4.0), &plain, 0.0),
+        wind_force_on_triangle(p[0], p[1], p[2], &plain)
     );
 }

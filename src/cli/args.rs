@@ -47,6 +47,13 @@ pub struct SceneArgs {
     /// `--sleep` (or `=on`) on, `--sleep=off` off (default: the scene's).
     #[arg(long, value_name = "on|off", num_args = 0..=1, require_equals = true, default_missing_value = "on", value_parser = parse_on_off)]
     pub sleep: Option<bool>,
+    /// Air speed of the scene's wind in m/s (0: pressure alone, whatever
+    /// the cloth's motion); see `Wind`.
+    #[arg(long, value_parser = parse_non_negative, allow_hyphen_values = true)]
+    pub wind_speed: Option<f32>,
+    /// Gusts of the scene's wind: how much its speed varies, as a share of it.
+    #[arg(long, value_parser = parse_non_negative, allow_hyphen_values = true)]
+    pub turbulence: Option<f32>,
     /// Linearisations (Newton iterations) per substep (implicit-euler).
     #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
     pub newton_iterations: Option<u32>,
@@ -82,6 +89,8 @@ impl SceneArgs {
             friction: self.friction,
             self_collision: self.self_collision,
             tethers: self.tethers,
+            wind_speed: self.wind_speed,
+            turbulence: self.turbulence,
             solver: SolverTuning {
                 sleep: self.sleep,
                 newton_iterations: self.newton_iterations,

@@ -10,14 +10,38 @@ use crate::math::Vector;
 /// Wind blowing on every triangle: `F = c A (n·d) n`, with `c` the strength,
 /// `A` the triangle's area, `d` the unit direction and `n` the unit normal,
 /// shared equally among the triangle's three particles.
+///
+/// With an air `speed`, the same law acts on the air's velocity relative to
+/// each triangle, `u = w(x, t) − v`: `d` becomes `u/|u|` and the pressure
+/// `c |u|²/speed²`, so a cloth moving with the wind feels less of it and
+/// one moving against it more (the air damps its flapping), plus a skin
+/// `friction` along the surface, `c_f c |u|²/speed² A (û − (n·û) n)`, which
+/// is what streams a flag out when it lies edge-on to the wind. `w` varies
+/// in time and space with `turbulence`: gusts that travel downwind at the
+/// air's speed, and side gusts, from a seeded pattern (deterministic).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Wind {
     /// Direction the wind blows towards (need not be normalised; zero means no wind).
     #[serde(deserialize_with = "crate::error::de::finite_vec")]
     pub direction: Vector,
-    /// Strength `c`, a pressure in N/m².
+    /// Strength `c`, a pressure in N/m² (at the air `speed`, on a still cloth).
     #[serde(deserialize_with = "crate::error::de::non_negative")]
     pub strength: f32,
+    /// Speed of the air in m/s; 0 (the default): the pressure law alone,
+    /// whatever the cloth's motion.
+    #[serde(default, deserialize_with = "crate::error::de::non_negative")]
+    pub speed: f32,
+    /// Skin friction `c_f`: the share of the pressure that drags along the
+    /// surface (with a `speed`; 0 by default).
+    #[serde(default, deserialize_with = "crate::error::de::non_negative")]
+    pub friction: f32,
+    /// Gusts: how much the air's speed varies, as a share of it (with a
+    /// `speed`; 0 by default: steady).
+    #[serde(default, deserialize_with = "crate::error::de::non_negative")]
+    pub turbulence: f32,
+    /// Seed of the gusts' pattern.
+    #[serde(default)]
+    pub seed: u32,
 }
 
 impl Wind {
@@ -25,14 +49,29 @@ impl Wind {
     pub const NONE: Wind = Wind {
         direction: Vector::ZERO,
         strength: 0.0,
+        speed: 0.0,
+        friction: 0.0,
+        turbulence: 0.0,
+        seed: 0,
     };
 
-    /// Wind towards `direction` with pressure `strength` in N/m².
+    /// Wind towards `direction` with pressure `strength` in N/m², the same
+    /// on a moving cloth as on a still one.
     pub fn new(direction: Vector, strength: f32) -> Self {
         Self {
             direction,
             strength,
+            ..Self::NONE
         }
+    }
+
+    /// The same wind as air moving at `speed` m/s, with skin `friction` and
+    /// gusts of relative size `turbulence` from pattern `seed` (see the
+    /// type's docs).
+    pub fn with_air(mut self, speed: f32, friction: f32, turbulence: f32, seed: u32) -> Self {
+        (self.speed, self.friction, self.turbulence, self.seed) =
+            (speed, friction, turbulence, seed);
+        self
     }
 
     /// True when it exerts no force.
@@ -103,6 +142,9 @@ impl PhysicsParams {
         non_negative("air drag", self.air_drag)?;
         finite_vec("wind direction", self.wind.direction)?;
         non_negative("wind strength", self.wind.strength)?;
+        non_negative("wind speed", self.wind.speed)?;
+        non_negative("wind friction", self.wind.friction)?;
+        non_negative("wind turbulence", self.wind.turbulence)?;
         non_negative("thickness", self.thickness)?;
         non_negative("self friction", self.self_friction)?;
         if let Some(t) = self.self_thickness {

@@ -73,7 +73,7 @@ impl SceneKind {
         match self {
             SceneKind::Drape => "a tablecloth falls on a ball and rests on top",
             SceneKind::Box => "a tablecloth falls on a cube; nothing passes through its edges",
-            SceneKind::Flag => "a flag pinned to its pole flaps in the wind",
+            SceneKind::Flag => "a flag streams out from its pole and flutters in a gusty wind",
             SceneKind::Pins => "a cloth hangs from a pinning figure (variants)",
             SceneKind::Curtain => "a curtain is pushed aside by a moving kinematic rapier ball",
             SceneKind::Hammock => "a hammock catches three dynamic rapier boxes (two-way coupling)",
@@ -190,6 +190,8 @@ impl SceneKind {
                     },
                 );
                 c.size = (1.6, 1.0);
+                // Cotton's own weight, 0.24 kg (not the scenes' 1 kg).
+                c.mass = None;
                 c
             }
             SceneKind::Curtain => ClothDesc::new(
@@ -265,7 +267,20 @@ impl SceneKind {
                 },
                 Vector::ZERO,
             )),
-            SceneKind::Flag => desc.wind = Wind::new(Vector::new(1.0, 0.0, 0.3), 8.0),
+            SceneKind::Flag => {
+                // A light breeze: 3.6 m/s of air (its dynamic pressure is
+                // the 8 N/m²), acting on the flag's motion relative to it,
+                // with skin friction and gusts.
+                desc.wind = Wind::new(Vector::new(1.0, 0.0, 0.3), 8.0).with_air(3.6, 0.2, 0.4, 7);
+                // The pole, just behind the pinned column.
+                desc.obstacles.push(ObstacleDesc::fixed(
+                    ShapeDesc::Capsule {
+                        half_height: 0.9,
+                        radius: 0.02,
+                    },
+                    Vector::new(-0.035, 0.9, 0.0),
+                ));
+            }
             SceneKind::Pins => {}
             SceneKind::Curtain => {
                 let mut ball = BodyDesc::new(

@@ -31,6 +31,10 @@ pub struct SceneOptions {
     pub self_collision: Option<bool>,
     /// Tethers to the pins (default: the scene's).
     pub tethers: Option<bool>,
+    /// Air speed of the wind, m/s (default: the scene's).
+    pub wind_speed: Option<f32>,
+    /// Gusts of the wind, a share of its speed (default: the scene's).
+    pub turbulence: Option<f32>,
     /// The solver's iterations and tolerances.
     pub solver: SolverTuning,
 }
@@ -124,6 +128,12 @@ impl SceneDesc {
         settings.validate()?;
         if let Some(f) = options.frames {
             self.frames = f;
+        }
+        if let Some(s) = options.wind_speed {
+            self.wind.speed = crate::error::non_negative("wind speed", s)?;
+        }
+        if let Some(t) = options.turbulence {
+            self.wind.turbulence = crate::error::non_negative("turbulence", t)?;
         }
         if let Some(f) = options.friction {
             self.friction = crate::error::non_negative("friction", f)?;

@@ -172,7 +172,7 @@ pub(crate) fn step(
     for i in 0..n {
         f_ext[i] = (model.gravity - v[i] * model.air_drag) * model.mass[i];
     }
-    add_wind_forces(model.triangles, &model.wind, x, f_ext);
+    add_wind_forces(model.triangles, &model.wind, (x, v), model.time, f_ext);
     let h2 = h as f64 * h as f64;
     for i in 0..n {
         x_n[i] = x[i];

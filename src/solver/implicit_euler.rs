@@ -264,7 +264,13 @@ pub(crate) fn step(
         st.external[i] = model.gravity * model.mass[i];
         st.friction[i] = Vector::ZERO;
     }
-    add_wind_forces(model.triangles, &model.wind, x, &mut st.external);
+    add_wind_forces(
+        model.triangles,
+        &model.wind,
+        (x, v),
+        model.time,
+        &mut st.external,
+    );
     let mut iterations = 0;
     let mut phi = f64::INFINITY;
     let (mut round, mut extra) = (0u32, 0u32);

@@ -201,7 +201,8 @@ impl ClothSolver {
                     Masses { mass, inv_mass },
                     &cloth.params,
                     team,
-                ),
+                )
+                .at((cloth.time + (substep as f64 * h as f64)) as f32),
                 settings: &self.settings,
                 obstacles,
                 mass_revision: cloth.mass_revision,

@@ -80,7 +80,13 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
     if !calm {
         ws.wind.clear();
         ws.wind.resize(n, Vector::ZERO);
-        add_wind_forces(model.triangles, &model.wind, x, &mut ws.wind);
+        add_wind_forces(
+            model.triangles,
+            &model.wind,
+            (x, v),
+            model.time,
+            &mut ws.wind,
+        );
     }
     let wind = if calm { None } else { Some(&ws.wind[..]) };
     let h2 = h * h;
