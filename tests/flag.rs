@@ -57,7 +57,6 @@ fn fly() -> (f32, f32, f32, f32) {
 #[test]
 fn the_flag_streams_out_downwind_and_flutters() {
     let (angle, along, least, travel) = fly();
-    eprintln!("PROBE angle {angle:.1} along {along:.3} least {least:.3} travel {travel:.3}");
     assert!(angle > 60.0, "{angle}° from straight down");
     assert!(along > 0.6 * 1.6, "{along} m downwind");
     assert!(least > 0.0, "upwind of the pole: {least}");

@@ -85,7 +85,12 @@ fn export_scene_then_run_the_file_gives_the_canonical_figures() {
 
 #[test]
 fn hand_written_scene_files_run_from_the_command() {
-    for (name, min_frames) in [("capsule_drape.ron", 150), ("cape.ron", 180)] {
+    for (name, min_frames) in [
+        ("capsule_drape.ron", 150),
+        ("cape.ron", 180),
+        ("skirt.ron", 150),
+        ("banner.ron", 150),
+    ] {
         let stdout = cloth3d_ok(&["run", &example(name), "--json"]);
         let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
         assert_eq!(v["finite"], true, "{v}");
@@ -96,6 +101,54 @@ fn hand_written_scene_files_run_from_the_command() {
         );
         assert!(v["max_stretch"].as_f64().unwrap() < 0.1, "{name}: {v}");
     }
+}
+
+/// The mesh scene files: the skirt hangs from its waist around its capsule
+/// with every vertex of the OBJ a particle and the waist pinned; the
+/// banner's top row follows its bar. A mesh file that is missing, or grid
+/// pins on a mesh, are refused by name.
+#[test]
+fn mesh_scene_files_build_their_cloth_from_the_obj() {
+    let mut skirt = Scene::open(&example("skirt.ron"), &SceneOptions::default()).unwrap();
+    assert_eq!(skirt.cloth.particle_count(), 24 * 11);
+    assert_eq!(skirt.cloth.pinned(), (0..24).collect::<Vec<_>>());
+    assert_eq!(
+        skirt.cloth.springs().count(cloth3d::SpringKind::Shear),
+        2 * 24 * 10
+    );
+    let frames = skirt.frames;
+    cloth3d::scenes::run(&mut skirt, frames).unwrap();
+    // The hem hangs about half a metre under the waist, around the capsule
+    // and outside it.
+    let hem = &skirt.cloth.positions()[24 * 10..];
+    assert!(hem.iter().all(|p| p.y < 0.55 && p.y > 0.4), "{hem:?}");
+    assert!(skirt.max_penetration() <= 0.001);
+    assert!(
+        hem.iter().all(|p| (p.x * p.x + p.z * p.z).sqrt() > 0.11),
+        "a hem particle is inside the capsule"
+    );
+
+    let mut banner = Scene::open(&example("banner.ron"), &SceneOptions::default()).unwrap();
+    for _ in 0..60 {
+        banner.step_frame().unwrap();
+    }
+    // One second in, the bar has carried the top row 0.4 m along x.
+    let top = banner.cloth.positions()[10];
+    assert!((top.x - 0.4).abs() < 0.05, "{top}");
+
+    let text = std::fs::read_to_string(example("skirt.ron")).unwrap();
+    let missing = text.replace("skirt.obj", "nosuch.obj");
+    let err = file::from_ron(&missing)
+        .and_then(Scene::from_desc)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("nosuch.obj"), "{err}");
+    let preset = text.replace("pins: (inside:", "pins: (preset: TwoCorners, inside:");
+    let err = file::from_ron(&preset)
+        .and_then(Scene::from_desc)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("no grid cells"), "{err}");
 }
 
 #[test]

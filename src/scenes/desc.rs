@@ -102,16 +102,24 @@ pub struct SceneDesc {
     pub frames: u32,
 }
 
-/// The cloth of a scene: a rectangular grid.
+/// The cloth of a scene: a rectangular grid, or the shape of a mesh.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ClothDesc {
-    /// Particles along a row (at least 2).
-    #[serde(deserialize_with = "crate::error::de::grid_side")]
+    /// Particles along a row (at least 2; not used with a `mesh`).
+    #[serde(default, deserialize_with = "crate::error::de::grid_side")]
     pub cols: usize,
-    /// Particles along a column (at least 2).
-    #[serde(deserialize_with = "crate::error::de::grid_side")]
+    /// Particles along a column (at least 2; not used with a `mesh`).
+    #[serde(default, deserialize_with = "crate::error::de::grid_side")]
     pub rows: usize,
+    /// An OBJ file to take the cloth's shape from instead of a grid (a
+    /// path relative to the scene file): its triangles and quads become
+    /// the cloth (`Cloth::from_mesh`), moved by `placement` (the mesh keeps
+    /// its own orientation, but for `Pose`'s rotation). `cols`, `rows`,
+    /// `size`, pin presets and pinned cells are then not used; pin its
+    /// vertices by index (`pins.particles`) or inside a box (`pins.inside`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<String>,
     /// Width (along the rows) and height, in metres.
     #[serde(default = "unit_size", deserialize_with = "positive_pair")]
     pub size: (f32, f32),
@@ -274,6 +282,10 @@ pub struct PinsDesc {
     /// More pinned particles, by `(row, column)`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub cells: Vec<(usize, usize)>,
+    /// More pinned particles: those inside the box from the first corner to
+    /// the second (metres, where the cloth starts).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inside: Option<(Vector, Vector)>,
 }
 
 impl Default for PinsDesc {
@@ -282,6 +294,7 @@ impl Default for PinsDesc {
             preset: PinPreset::None,
             particles: Vec::new(),
             cells: Vec::new(),
+            inside: None,
         }
     }
 }
@@ -289,7 +302,10 @@ impl Default for PinsDesc {
 impl PinsDesc {
     /// True when nothing is pinned.
     pub fn is_empty(&self) -> bool {
-        self.preset == PinPreset::None && self.particles.is_empty() && self.cells.is_empty()
+        self.preset == PinPreset::None
+            && self.particles.is_empty()
+            && self.cells.is_empty()
+            && self.inside.is_none()
     }
 
     /// Just a preset.
@@ -673,6 +689,7 @@ impl ClothDesc {
             pins: PinsDesc::default(),
             self_collision: false,
             self_thickness: None,
+            mesh: None,
             tethers: false,
             cuts: Vec::new(),
         }

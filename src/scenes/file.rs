@@ -69,7 +69,22 @@ pub fn to_ron(desc: &SceneDesc) -> Result<String, SceneError> {
 
 /// Reads a scene file. Errors name the file, line, column and field.
 pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
-    from_ron(&read(path)?).map_err(|e| in_file(e, path))
+    let mut desc = from_ron(&read(path)?).map_err(|e| in_file(e, path))?;
+    resolve_meshes(&mut desc, path);
+    Ok(desc)
+}
+
+/// Makes the meshes' paths, relative to the scene file at `path`, usable
+/// from here.
+fn resolve_meshes(desc: &mut SceneDesc, path: &Path) {
+    let dir = path.parent().unwrap_or(Path::new(""));
+    for cloth in std::iter::once(&mut desc.cloth).chain(&mut desc.cloths) {
+        if let Some(mesh) = &mut cloth.mesh {
+            if Path::new(mesh.as_str()).is_relative() {
+                *mesh = dir.join(&*mesh).display().to_string();
+            }
+        }
+    }
 }
 
 /// Reads a scene file and hands its description to `build`; every error,
@@ -80,7 +95,8 @@ pub fn load_with<T>(
     build: impl FnOnce(SceneDesc) -> Result<T, SceneError>,
 ) -> Result<T, SceneError> {
     let text = read(path)?;
-    let desc = from_ron(&text).map_err(|e| in_file(e, path))?;
+    let mut desc = from_ron(&text).map_err(|e| in_file(e, path))?;
+    resolve_meshes(&mut desc, path);
     build(desc).map_err(|e| in_file(locate(e, &text), path))
 }
 

@@ -131,12 +131,17 @@ pub fn run_with(
         on_frame(scene, f, deepest);
     }
     let cloth = &scene.cloth;
-    // A torn cloth's cells are still its grid's; several cloths report the first's.
+    // A torn cloth's cells are still its grid's; several cloths report the
+    // first's.
     let grid = cloth
         .topology()
         .cells()
         .map(|g| [g.cols, g.rows])
-        .unwrap_or([scene.desc.cloth.cols, scene.desc.cloth.rows]);
+        .unwrap_or(match scene.desc.cloth.mesh {
+            // A mesh has no grid: its particles in one row.
+            Some(_) => [cloth.particle_count(), 1],
+            None => [scene.desc.cloth.cols, scene.desc.cloth.rows],
+        });
     let min_y = cloth
         .positions()
         .iter()

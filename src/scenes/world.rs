@@ -8,7 +8,7 @@ use super::catalogue::SceneKind;
 use super::desc::{BodyDesc, BodyKind, ClothDesc, Placement, SceneDesc};
 use super::error::SceneError;
 use super::options::SceneOptions;
-use crate::cloth::{Cloth, ClothBuilder, PinPreset};
+use crate::cloth::{Cloth, ClothBuilder, MassSpec, PinPreset};
 use crate::collision::Obstacle;
 use crate::error::ClothError;
 use crate::math::{Pose, Rotation, Vector};
@@ -356,6 +356,91 @@ fn build_cloth(c: &ClothDesc, at: &str) -> Result<Cloth, SceneError> {
         .material
         .material()
         .map_err(|e| SceneError::field(format!("{at}.material"), e))?;
+    let mut cloth = match &c.mesh {
+        Some(path) => mesh_cloth(c, path, material, at)?,
+        None => grid_cloth(c, material, at)?,
+    };
+    if let Some((lo, hi)) = c.pins.inside {
+        let inside: Vec<usize> = (0..cloth.particle_count())
+            .filter(|&i| {
+                let p = cloth.positions()[i];
+                p.cmpge(lo.min(hi)).all() && p.cmple(lo.max(hi)).all()
+            })
+            .collect();
+        if inside.is_empty() {
+            return Err(SceneError::field(
+                format!("{at}.pins.inside"),
+                "no particle of the cloth lies inside the box",
+            ));
+        }
+        for i in inside {
+            cloth.pin(i)?;
+        }
+    }
+    Ok(cloth)
+}
+
+/// The cloth of a mesh description: the OBJ file's shape, placed.
+fn mesh_cloth(
+    c: &ClothDesc,
+    path: &str,
+    material: crate::cloth::Material,
+    at: &str,
+) -> Result<Cloth, SceneError> {
+    if c.pins.preset != PinPreset::None || !c.pins.cells.is_empty() || !c.cuts.is_empty() {
+        return Err(SceneError::field(
+            format!("{at}.pins"),
+            "a mesh cloth has no grid cells: pin its vertices by index (particles) or inside a box (inside)",
+        ));
+    }
+    let mut mesh = read_mesh(path)?;
+    let pose = match c.placement {
+        Placement::Horizontal { center } | Placement::Vertical { center } => {
+            Pose::from_translation(center)
+        }
+        Placement::Pose {
+            translation,
+            rotation,
+        } => Pose::from_parts(translation, Rotation::from_scaled_axis(rotation)),
+    };
+    for p in &mut mesh.positions {
+        *p = pose.transform_point(*p);
+    }
+    let mass = match c.mass {
+        Some(m) => MassSpec::Total(m),
+        None => MassSpec::FromDensity,
+    };
+    let mut cloth = Cloth::from_mesh(&mesh, material, mass)
+        .map_err(|e| SceneError::field(format!("{at}.mesh"), e))?;
+    for &p in &c.pins.particles {
+        cloth
+            .pin(p)
+            .map_err(|e| SceneError::field(format!("{at}.pins.particles"), e))?;
+    }
+    Ok(cloth)
+}
+
+/// The mesh of the OBJ file at `path`.
+#[cfg(feature = "scene-files")]
+fn read_mesh(path: &str) -> Result<crate::cloth::ClothMesh, SceneError> {
+    super::mesh_file::load_obj(std::path::Path::new(path))
+}
+
+/// Without the `scene-files` feature there is no mesh reader.
+#[cfg(not(feature = "scene-files"))]
+fn read_mesh(path: &str) -> Result<crate::cloth::ClothMesh, SceneError> {
+    Err(SceneError::Io {
+        path: path.to_string(),
+        message: "reading meshes needs cloth3d's `scene-files` feature".into(),
+    })
+}
+
+/// The cloth of a grid description.
+fn grid_cloth(
+    c: &ClothDesc,
+    material: crate::cloth::Material,
+    at: &str,
+) -> Result<Cloth, SceneError> {
     let mut builder = ClothBuilder::new(c.cols, c.rows)
         .size(c.size.0, c.size.1)
         .material(material)
