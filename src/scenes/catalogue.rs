@@ -364,6 +364,7 @@ impl SceneKind {
             variant: None,
             ..options.clone()
         })?;
+        desc.props = self.props(&desc);
         if self == SceneKind::Tear {
             // Each bar holds its edge's particles (at the grid chosen), and
             // a slit across the middle fifth of the sheet, halfway between
@@ -385,6 +386,86 @@ impl SceneKind {
             }
         }
         Ok(desc)
+    }
+
+    /// What holds the scene's cloth and obstacles, drawn but not simulated:
+    /// the ground, the stands under the balls and the cube, the flag's
+    /// ground, the rods the pins hang from, the curtain's rail, the
+    /// hammock's posts, the fold's bar stands.
+    fn props(self, desc: &SceneDesc) -> Vec<ObstacleDesc> {
+        let ground = |y: f32| {
+            ObstacleDesc::fixed(
+                ShapeDesc::Cuboid {
+                    half_extents: Vector::new(2.0, 0.01, 2.0),
+                },
+                Vector::new(0.0, y - 0.01, 0.0),
+            )
+        };
+        // An upright rod from `bottom` to `top` at (x, z).
+        let rod = |x: f32, z: f32, bottom: f32, top: f32, radius: f32| {
+            ObstacleDesc::fixed(
+                ShapeDesc::Cylinder {
+                    half_height: 0.5 * (top - bottom),
+                    radius,
+                },
+                Vector::new(x, 0.5 * (top + bottom), z),
+            )
+        };
+        let c = &desc.cloth;
+        match self {
+            // The ball and the cube on a stand on the floor.
+            SceneKind::Drape | SceneKind::Stack => {
+                vec![ground(-1.0), rod(0.0, 0.0, -1.0, -0.25, 0.03)]
+            }
+            SceneKind::Box => vec![ground(-1.0), rod(0.0, 0.0, -1.0, -0.25, 0.03)],
+            SceneKind::Flag | SceneKind::Tear => vec![ground(0.0)],
+            SceneKind::Curtain => {
+                // The rail along the top row, on two stands.
+                let (w, top) = (0.5 * c.size.0, 1.0 + 0.5 * c.size.1);
+                let mut rail = ObstacleDesc::fixed(
+                    ShapeDesc::Capsule {
+                        half_height: w + 0.05,
+                        radius: 0.012,
+                    },
+                    Vector::new(0.0, top + 0.015, 0.0),
+                );
+                rail.rotation = Vector::new(0.0, 0.0, std::f32::consts::FRAC_PI_2);
+                vec![
+                    ground(0.0),
+                    rail,
+                    rod(-w - 0.06, 0.0, 0.0, top + 0.03, 0.015),
+                    rod(w + 0.06, 0.0, 0.0, top + 0.03, 0.015),
+                ]
+            }
+            SceneKind::Pins => {
+                // A rod from each pin up to the ceiling's height.
+                let (cols, rows) = (c.cols, c.rows);
+                let (w, h) = c.size;
+                c.pins
+                    .preset
+                    .cells(cols, rows)
+                    .into_iter()
+                    .map(|(r, col)| {
+                        let x = -0.5 * w + col as f32 * w / (cols - 1) as f32;
+                        let z = -0.5 * h + r as f32 * h / (rows - 1) as f32;
+                        rod(x, z, 0.61, 1.2, 0.006)
+                    })
+                    .collect()
+            }
+            SceneKind::Hammock => {
+                // A post under each corner, just outside it.
+                let s = 0.5 * c.size.0 + 0.03;
+                [(-s, -s), (-s, s), (s, -s), (s, s)]
+                    .map(|(x, z)| rod(x, z, 0.0, 0.52, 0.025))
+                    .to_vec()
+            }
+            SceneKind::Fold => {
+                // A stand under each end of the bar.
+                [-0.8f32, 0.8]
+                    .map(|z| rod(0.0, z, 0.0, FOLD_BAR_HEIGHT, 0.015))
+                    .to_vec()
+            }
+        }
     }
 
     fn check_variant(self, variant: Option<PinPreset>) -> Result<Option<PinPreset>, ClothError> {

@@ -56,6 +56,11 @@ pub struct SceneDesc {
     /// Particles held at points of rapier bodies.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub attachments: Vec<AttachmentDesc>,
+    /// Shapes drawn with the scene that nothing collides with: the ground
+    /// under a ball, the posts and rails that pins hang from (the viewer
+    /// draws them; the simulation ignores them).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub props: Vec<ObstacleDesc>,
     /// Wind on the cloth's triangles.
     #[serde(default = "calm")]
     pub wind: Wind,
@@ -661,6 +666,7 @@ impl SceneDesc {
             description: String::new(),
             cloth,
             cloths: Vec::new(),
+            props: Vec::new(),
             obstacles: Vec::new(),
             bodies: Vec::new(),
             attachments: Vec::new(),

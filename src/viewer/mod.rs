@@ -22,6 +22,8 @@ pub const BEND_COLOR: Color = Color::new(0.35, 0.55, 1.0, 1.0);
 pub const BACKGROUND: Color = Color::new(0.11, 0.12, 0.15, 1.0);
 /// Colour of obstacles.
 pub const OBSTACLE_COLOR: Color = Color::new(0.62, 0.64, 0.68, 1.0);
+/// Colour of the props: the ground, posts, rails and stands nothing collides with.
+pub const PROP_COLOR: Color = Color::new(0.40, 0.42, 0.46, 1.0);
 
 /// The colour of a spring kind in the trace.
 pub fn kind_color(kind: SpringKind) -> Color {
@@ -97,6 +99,17 @@ impl SceneView {
             .iter()
             .map(|o| obstacle_node(&mut group, o))
             .collect();
+        // The props: drawn once, they never move.
+        for prop in &scene.desc.props {
+            let Ok(shape) = prop.shape.shape() else {
+                continue;
+            };
+            let o = Obstacle::new(shape, prop.pose());
+            if let Some(mut node) = obstacle_node(&mut group, &o) {
+                node.set_pose(o.pose);
+                node.set_color_recursive(PROP_COLOR);
+            }
+        }
         let mut view = SceneView {
             group,
             cloth: cloth_node,
