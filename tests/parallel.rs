@@ -5,7 +5,7 @@ mod common;
 
 use cloth3d::prelude::*;
 use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
-use common::bits;
+use common::{bits, on_threads};
 
 #[test]
 fn parallel_and_serial_steps_are_bit_identical() {
@@ -36,11 +36,7 @@ fn parallel_and_serial_steps_are_bit_identical() {
             }
             bits(&scene.cloth)
         };
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
-        let parallel = pool.install(|| run(true));
+        let parallel = on_threads(2, || run(true));
         assert_eq!(parallel, run(false), "{integrator}");
     }
 }
@@ -59,11 +55,7 @@ fn the_default_solver_gives_the_same_bits_on_two_threads_as_on_one() {
         (SceneKind::Stack, 28, 50),
     ] {
         let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
+            on_threads(threads, || {
                 let options = SceneOptions {
                     n: Some(n),
                     substeps: Some(Substeps::Fixed(24)),

@@ -7,7 +7,7 @@ mod common;
 use cloth3d::metrics::pieces;
 use cloth3d::prelude::*;
 use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
-use common::bits;
+use common::{bits, on_threads};
 
 const COLS: usize = 17;
 const ROWS: usize = 11;
@@ -240,11 +240,7 @@ fn a_snapshot_after_a_tear_continues_bit_for_bit() {
 #[test]
 fn the_tear_scene_tears_in_two_the_same_on_any_thread_count() {
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        on_threads(threads, || {
             let mut scene = Scene::build(SceneKind::Tear, &SceneOptions::default()).unwrap();
             let mut torn = 0;
             for _ in 0..scene.frames {

@@ -136,3 +136,13 @@ pub fn spinning(integrator: Integrator, substeps: Substeps, damped: bool) -> Sim
     }
     cloth
 }
+
+/// Runs `f` on a rayon pool of `threads` threads (the solver's team takes
+/// its threads from the pool it runs in).
+pub fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
