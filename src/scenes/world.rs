@@ -131,7 +131,7 @@ impl Scene {
         let (self_collision, tethers) = (any(|c| c.self_collision), any(|c| c.tethers));
         let mut cloth = Cloth::join(pieces).map_err(|e| match e {
             ClothError::InvalidTopology { index, .. } => {
-                SceneError::field(format!("cloths[{}].material", index - 1), e)
+                SceneError::field(format!("cloths[{}].material", index.saturating_sub(1)), e)
             }
             other => SceneError::from(other),
         })?;

@@ -76,7 +76,7 @@ impl SleepState {
             && sleeper.material == cloth.material
             && sleeper.pins == pins_of(cloth)
             && cloth.velocities().iter().all(|&v| v == Vector::ZERO)
-            && !obstacles.iter().any(|o| moves_near(o, cloth));
+            && !moves_near(obstacles, cloth);
         if !still {
             self.wake();
         }
@@ -107,22 +107,30 @@ impl SleepState {
     }
 }
 
-/// True when obstacle `o` moves and comes within [`WAKE_MARGIN`] of the
-/// cloth's bounds.
-fn moves_near(o: &Obstacle, cloth: &Cloth) -> bool {
-    let moving = o.linvel != Vector::ZERO || o.angvel != Vector::ZERO;
-    if !moving {
+/// True when one of the `obstacles` moves and comes within
+/// [`WAKE_MARGIN`] of the cloth's bounds.
+fn moves_near(obstacles: &[Obstacle], cloth: &Cloth) -> bool {
+    let mut moving = obstacles
+        .iter()
+        .filter(|o| o.linvel != Vector::ZERO || o.angvel != Vector::ZERO)
+        .peekable();
+    if moving.peek().is_none() {
         return false;
     }
+    // The cloth's bounds, once, padded.
     let x = cloth.positions();
+    let pad = Vector::splat(WAKE_MARGIN + cloth.params.thickness);
     let lo = x
         .iter()
-        .fold(Vector::splat(f32::INFINITY), |a, &p| a.min(p));
+        .fold(Vector::splat(f32::INFINITY), |a, &p| a.min(p))
+        - pad;
     let hi = x
         .iter()
-        .fold(Vector::splat(f32::NEG_INFINITY), |a, &p| a.max(p));
-    let pad = Vector::splat(WAKE_MARGIN + cloth.params.thickness);
-    let aabb = o.shape.compute_aabb(&o.pose);
-    let (olo, ohi) = (Vector::from(aabb.mins), Vector::from(aabb.maxs));
-    olo.cmple(hi + pad).all() && ohi.cmpge(lo - pad).all()
+        .fold(Vector::splat(f32::NEG_INFINITY), |a, &p| a.max(p))
+        + pad;
+    moving.any(|o| {
+        let aabb = o.shape.compute_aabb(&o.pose);
+        let (olo, ohi) = (Vector::from(aabb.mins), Vector::from(aabb.maxs));
+        olo.cmple(hi).all() && ohi.cmpge(lo).all()
+    })
 }
