@@ -105,8 +105,7 @@ impl TopologyEdit {
         // The triangles in front move to the new particle.
         for t in self.triangles.iter_mut() {
             if let Some(k) = t.iter().position(|&u| u == pi) {
-                let centroid = (x[t[0] as usize] + x[t[1] as usize] + x[t[2] as usize]) / 3.0;
-                if (centroid - origin).dot(normal) > 0.0 {
+                if in_front(t) {
                     t[k] = q;
                 }
             }
