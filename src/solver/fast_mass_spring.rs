@@ -21,7 +21,7 @@ use crate::error::ClothError;
 use crate::forces::add_wind_forces;
 use crate::math::Vector;
 
-use super::global_matrix::{build_factor, key, weight, Factor};
+use super::global_matrix::{build_factor, key, weight, Factor, FactorHistory};
 use super::substep::Substep;
 
 /// Weight of a particle held by static friction in the global matrix, as a
@@ -79,14 +79,17 @@ pub(crate) fn step(
     x: &mut [Vector],
     v: &mut [Vector],
     st: &mut FastMassSpringState,
-    held_force: &mut Vec<Vector>,
+    (held_force, history): (&mut Vec<Vector>, &mut FactorHistory),
     collision: &mut CollisionStage,
 ) -> Result<u32, ClothError> {
     let (model, h, iterations) = (&sub.model, sub.ctx.h, sub.settings.fms_iterations);
     let n = x.len();
     let key = key(model, h, n, sub.mass_revision);
     if st.factor.as_ref().is_none_or(|f| f.key != key) {
-        st.factor = Some(build_factor(model, h, n, key)?);
+        let mut factor = build_factor(model, h, n, key)?;
+        // A snapshot's factor is taken up where it was left.
+        factor.adopt(history)?;
+        st.factor = Some(factor);
         st.factorizations += 1;
     }
     let FastMassSpringState {
@@ -163,7 +166,7 @@ pub(crate) fn step(
             }
         }
     }
-    if factor.set_contacts(contact)? {
+    if factor.set_contacts(contact, history)? {
         *refactorizations += 1;
     }
     let factor = &*factor;

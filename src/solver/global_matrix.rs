@@ -7,6 +7,7 @@
 
 use nalgebra_sparse::factorization::CscCholesky;
 use nalgebra_sparse::{CooMatrix, CscMatrix};
+use serde::{Deserialize, Serialize};
 
 use crate::cloth::SpringKind;
 use crate::error::ClothError;
@@ -15,7 +16,7 @@ use crate::forces::ForceModel;
 use super::ordering::nested_dissection;
 
 /// What the factor was computed for; any change means a new factor.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub(crate) struct FactorKey {
     h: u32,
     params: [[u32; 2]; 3],
@@ -49,10 +50,59 @@ pub(crate) struct Factor {
     parent: Vec<usize>,
     /// Rank-one updates since the last full factorisation.
     updates: usize,
+    /// A hash (FNV-1a) of the masses and free rows the factor was built with.
+    mass_hash: u64,
     /// Dense scratch of the updates.
     work: Vec<f64>,
     /// Scratch: the matrix's values with the contact weights, for a refactorisation.
     values: Vec<f64>,
+}
+
+/// How the factor in use came to be, so that a solver resumed from a
+/// snapshot rebuilds it bit for bit: rank-one updates round differently
+/// from a fresh factorisation, so the resumed solver must take the same
+/// path. The contact weights (as `f64` bits, exact through any format) of
+/// the last full factorisation, and every rank-one update since, in order.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub(crate) struct FactorHistory {
+    /// The factor this history is of (none: no factor yet): its key with the
+    /// cloth's mass revision (which a snapshot does not keep) replaced by a
+    /// hash of the masses and pins themselves.
+    key: Option<FactorKey>,
+    /// Rows with a contact weight at the last full factorisation, and the
+    /// weights' bits (empty: the factor as first built, without contacts).
+    fresh: Vec<(u32, u64)>,
+    /// Each rank-one update since: the row and its new weight's bits.
+    updates: Vec<(u32, u64)>,
+}
+
+impl FactorHistory {
+    /// True when there is nothing to keep: no factor yet.
+    pub fn is_empty(&self) -> bool {
+        self.key.is_none()
+    }
+
+    /// Starts the history of a factor just built for `key`, of `m` rows,
+    /// with room for all it can hold (a warmed-up step allocates nothing):
+    /// `set_contacts` refactors before the updates pass `4 m`.
+    fn start(&mut self, key: FactorKey, m: usize) {
+        self.key = Some(key);
+        self.fresh.clear();
+        self.updates.clear();
+        self.fresh.reserve(m);
+        self.updates.reserve(5 * m);
+    }
+
+    /// Records a full factorisation with the weights `contact`.
+    fn refactored(&mut self, contact: &[f64]) {
+        self.fresh.clear();
+        self.updates.clear();
+        for (r, &w) in contact.iter().enumerate() {
+            if w != 0.0 {
+                self.fresh.push((r as u32, w.to_bits()));
+            }
+        }
+    }
 }
 
 /// What a factor for this model and step depends on.
@@ -155,6 +205,7 @@ pub(crate) fn build_factor(
         let rows = &csc.row_indices()[start..csc.col_offsets()[j + 1]];
         *d = start + rows.iter().position(|&r| r == j).unwrap_or(0);
     }
+    let mass_hash = mass_hash(model.mass, &row);
     let chol = CscCholesky::factor(&csc)
         .map_err(|e| ClothError::Solver(format!("Cholesky factorisation failed: {e:?}")))?;
     Ok(Factor {
@@ -168,9 +219,21 @@ pub(crate) fn build_factor(
         diagonal,
         contact: vec![0.0; m],
         updates: 0,
+        mass_hash,
         work: vec![0.0; m],
         values: Vec::new(),
     })
+}
+
+/// FNV-1a over the masses' bits and the rows of the free particles.
+fn mass_hash(mass: &[f32], row: &[u32]) -> u64 {
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    for word in mass.iter().map(|m| m.to_bits()).chain(row.iter().copied()) {
+        for byte in word.to_le_bytes() {
+            hash = (hash ^ byte as u64).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    hash
 }
 
 impl Factor {
@@ -210,7 +273,11 @@ impl Factor {
     /// rows by sparse rank-one updates along the elimination tree (Davis and
     /// Hager), many by a numeric refactorisation with the same pattern.
     /// Returns whether the factor changed.
-    pub fn set_contacts(&mut self, contact: &[f64]) -> Result<bool, ClothError> {
+    pub fn set_contacts(
+        &mut self,
+        contact: &[f64],
+        history: &mut FactorHistory,
+    ) -> Result<bool, ClothError> {
         if self.contact == contact {
             return Ok(false);
         }
@@ -227,15 +294,68 @@ impl Factor {
         if !fresh {
             for r in 0..m {
                 let delta = contact[r] - self.contact[r];
-                if delta != 0.0 && !self.rank_one(r, delta) {
-                    return self.refactor(contact);
+                if delta != 0.0 {
+                    if !self.rank_one(r, delta) {
+                        history.refactored(contact);
+                        return self.refactor(contact);
+                    }
+                    history.updates.push((r as u32, contact[r].to_bits()));
                 }
                 self.contact[r] = contact[r];
             }
             self.updates += changed;
             return Ok(true);
         }
+        history.refactored(contact);
         self.refactor(contact)
+    }
+
+    /// The factor's key as a snapshot can restore it: the mass revision
+    /// replaced by the hash of the masses and pins it was built with.
+    fn lasting_key(&self) -> FactorKey {
+        FactorKey {
+            masses: self.mass_hash,
+            ..self.key
+        }
+    }
+
+    /// Brings a factor just built for `key` to where `history` left the
+    /// solver's (a snapshot's), by the same full factorisation and rank-one
+    /// updates in the same order; a history of another factor is started
+    /// afresh instead.
+    pub fn adopt(&mut self, history: &mut FactorHistory) -> Result<(), ClothError> {
+        let key = self.lasting_key();
+        let m = self.contact.len();
+        let in_range = |&(r, _): &(u32, u64)| (r as usize) < m;
+        if history.key != Some(key)
+            || !(history.fresh.iter().all(in_range) && history.updates.iter().all(in_range))
+        {
+            history.start(key, m);
+            return Ok(());
+        }
+        history.fresh.reserve(m.saturating_sub(history.fresh.len()));
+        history.updates.reserve((5 * m).saturating_sub(history.updates.len()));
+        if !history.fresh.is_empty() {
+            let mut contact = vec![0.0; m];
+            for &(r, w) in &history.fresh {
+                contact[r as usize] = f64::from_bits(w);
+            }
+            self.refactor(&contact)?;
+        }
+        for &(r, w) in &history.updates {
+            let (r, w) = (r as usize, f64::from_bits(w));
+            let delta = w - self.contact[r];
+            if delta != 0.0 && !self.rank_one(r, delta) {
+                // Cannot happen on the same path; start afresh if it does.
+                let mut contact = self.contact.clone();
+                contact[r] = w;
+                history.refactored(&contact);
+                return self.refactor(&contact).map(|_| ());
+            }
+            self.contact[r] = w;
+            self.updates += 1;
+        }
+        Ok(())
     }
 
     /// Factors the matrix with the weights `contact` afresh (same pattern).
@@ -345,6 +465,8 @@ mod tests {
         let h = 1.0 / 60.0;
         let key = key(&model, h, n * n, cloth.mass_revision());
         let mut updated = build_factor(&model, h, n * n, key).unwrap();
+        let mut history = FactorHistory::default();
+        updated.adopt(&mut history).unwrap();
         let mut contact = vec![0.0; n * n];
         // Weights come and go on a few rows at a time, as contacts do.
         for round in 0..30usize {
@@ -356,12 +478,26 @@ mod tests {
                     0.0
                 };
             }
-            updated.set_contacts(&contact).unwrap();
+            updated.set_contacts(&contact, &mut history).unwrap();
+            if round == 12 {
+                // Many rows at once: a full factorisation, then updates again.
+                contact.iter_mut().step_by(5).for_each(|w| *w = 1.0);
+                updated.set_contacts(&contact, &mut history).unwrap();
+            }
         }
         assert!(
-            updated.updates > 0,
-            "the rows changed few at a time were updated"
+            updated.updates > 0 && !history.fresh.is_empty(),
+            "the rows changed few at a time were updated, after a full factorisation"
         );
+        // A factor rebuilt from the history (as from a snapshot) is the same
+        // to the bit; without it, it differs in the last bits.
+        let mut resumed = build_factor(&model, h, n * n, key).unwrap();
+        resumed.adopt(&mut history.clone()).unwrap();
+        assert_eq!(resumed.contact, updated.contact);
+        assert!(resumed.l_values == updated.l_values, "bit for bit");
+        let mut fresh_only = build_factor(&model, h, n * n, key).unwrap();
+        fresh_only.refactor(&contact).unwrap();
+        assert!(fresh_only.l_values != updated.l_values, "the path matters");
         let mut fresh = build_factor(&model, h, n * n, key).unwrap();
         fresh.refactor(&contact).unwrap();
         let (a, b) = (solution(&updated), solution(&fresh));

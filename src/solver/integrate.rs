@@ -73,7 +73,7 @@ pub(crate) fn integrate(
             x,
             v,
             &mut ws.fms,
-            &mut state.held_force,
+            (&mut state.held_force, &mut state.fms_factor),
             &mut ws.collision,
         )?),
     })

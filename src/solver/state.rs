@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::global_matrix::FactorHistory;
 use super::sleep::SleepState;
 use crate::math::Vector;
 
@@ -15,6 +16,11 @@ pub struct SolverState {
     /// friction cone. Empty until that solver runs.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub(crate) held_force: Vec<Vector>,
+    /// How the fast mass-spring solver's factor came to be (its full
+    /// factorisation's contacts and its rank-one updates since), so that a
+    /// resumed solver rebuilds it bit for bit. Empty until that solver runs.
+    #[serde(default, skip_serializing_if = "FactorHistory::is_empty")]
+    pub(crate) fms_factor: FactorHistory,
     /// Whether the cloth sleeps (with `SolverSettings::sleep`).
     #[serde(default, skip_serializing_if = "SleepState::is_awake")]
     pub(crate) sleep: SleepState,
