@@ -9,8 +9,12 @@ use crate::cloth::Cloth;
 use crate::math::Vector;
 
 /// The cloth's current mesh as OBJ text: positions (`v`, metres), texture
-/// coordinates (`vt`), vertex normals (`vn`) and triangles (`f v/vt/vn`,
-/// counter-clockwise seen from the front).
+/// coordinates (`vt`), vertex normals (`vn`) and faces (`f v/vt/vn`,
+/// counter-clockwise seen from the front). A grid cloth writes its cells as
+/// quads, each starting at a corner of the diagonal it is drawn split along,
+/// so that [`Cloth::from_mesh`] reads back its stretch springs (the cells'
+/// sides), its shear springs (both diagonals) and its masses; any other
+/// cloth (a mesh cloth, or a grid that has torn) writes its triangles.
 pub fn obj_string(cloth: &Cloth) -> String {
     let mut out = String::with_capacity(cloth.particle_count() * 96);
     let _ = writeln!(
@@ -30,11 +34,38 @@ pub fn obj_string(cloth: &Cloth) -> String {
     for n in cloth.vertex_normals() {
         let _ = writeln!(out, "vn {} {} {}", n.x, n.y, n.z);
     }
-    for t in cloth.triangles() {
-        let [a, b, c] = t.map(|i| i + 1);
-        let _ = writeln!(out, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}");
+    match cloth.grid() {
+        Some(grid) => {
+            for quad in grid_quads(grid.cols, grid.rows) {
+                let [a, b, c, d] = quad.map(|i| i + 1);
+                let _ = writeln!(out, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c} {d}/{d}/{d}");
+            }
+        }
+        None => {
+            for t in cloth.triangles() {
+                let [a, b, c] = t.map(|i| i + 1);
+                let _ = writeln!(out, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}");
+            }
+        }
     }
     out
+}
+
+/// A grid's cells as quads (0-based particle indices), each listed from a
+/// corner of the diagonal the grid's triangles split it along (the grid
+/// alternates it, cell by cell), in the triangles' turning sense.
+fn grid_quads(cols: usize, rows: usize) -> impl Iterator<Item = [u32; 4]> {
+    let id = move |r: usize, c: usize| (r * cols + c) as u32;
+    (0..rows.saturating_sub(1)).flat_map(move |r| {
+        (0..cols.saturating_sub(1)).map(move |c| {
+            let (p00, p01, p10, p11) = (id(r, c), id(r, c + 1), id(r + 1, c), id(r + 1, c + 1));
+            if (r + c) % 2 == 0 {
+                [p00, p10, p11, p01]
+            } else {
+                [p10, p11, p01, p00]
+            }
+        })
+    })
 }
 
 /// Writes the cloth's current mesh to `path` as OBJ.

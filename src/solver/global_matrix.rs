@@ -334,7 +334,9 @@ impl Factor {
             return Ok(());
         }
         history.fresh.reserve(m.saturating_sub(history.fresh.len()));
-        history.updates.reserve((5 * m).saturating_sub(history.updates.len()));
+        history
+            .updates
+            .reserve((5 * m).saturating_sub(history.updates.len()));
         if !history.fresh.is_empty() {
             let mut contact = vec![0.0; m];
             for &(r, w) in &history.fresh {
