@@ -156,20 +156,22 @@ fn to_world(pose: &PoseF64, point: DVec3, normal: DVec3, signed: f64) -> Option<
         .then_some(contact)
 }
 
-/// A ball, analytically: `c + r (p - c)/|p - c|`; the centre pushes out along the world's up.
+/// A ball, analytically: `c + r (p - c)/|p - c|`; the centre pushes out
+/// along the world's up. A ball looks the same however it is turned, so the
+/// query stays in world coordinates: no rotation there and back.
+#[inline]
 fn ball_contact(radius: f32, pose: &PoseF64, point: Vector) -> Option<Contact> {
-    let local = local_f64(pose, point);
+    let offset = point.as_dvec3() - pose.t;
     let r = radius as f64;
-    let dist = local.length();
-    let normal = if dist > 1e-12 {
-        local / dist
-    } else {
-        pose.pose
-            .inverse_transform_vector(Vector::Y)
-            .as_dvec3()
-            .normalize()
+    let dist = offset.length();
+    let normal = if dist > 1e-12 { offset / dist } else { DVec3::Y };
+    let contact = Contact {
+        point: (pose.t + normal * r).as_vec3(),
+        normal: normal.as_vec3(),
+        signed_distance: (dist - r) as f32,
     };
-    to_world(pose, normal * r, normal, dist - r)
+    (contact.point.is_finite() && contact.normal.is_finite() && contact.signed_distance.is_finite())
+        .then_some(contact)
 }
 
 /// A cuboid, analytically: the clamp of the point to the box when outside,
