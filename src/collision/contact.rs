@@ -164,7 +164,11 @@ fn ball_contact(radius: f32, pose: &PoseF64, point: Vector) -> Option<Contact> {
     let offset = point.as_dvec3() - pose.t;
     let r = radius as f64;
     let dist = offset.length();
-    let normal = if dist > 1e-12 { offset / dist } else { DVec3::Y };
+    let normal = if dist > 1e-12 {
+        offset / dist
+    } else {
+        DVec3::Y
+    };
     let contact = Contact {
         point: (pose.t + normal * r).as_vec3(),
         normal: normal.as_vec3(),

@@ -1,9 +1,11 @@
-//! Which particles of a cloth are neighbours in its rest mesh, so that
-//! self-collision leaves them alone: a particle and a triangle are
-//! neighbours when the particle is a corner of the triangle or is joined
-//! by a spring (stretch, shear or bend) to one of its corners. On a grid
-//! that spares every particle within two cells; the rest of the cloth can
-//! only come near through a fold. Also the triangles' edges, once each.
+//! Which particles of a cloth are neighbours in its rest mesh: a particle
+//! and a triangle are *near* when the particle is a corner of the triangle
+//! or is joined by a spring (stretch, shear or bend) to one of its corners
+//! (on a grid, every particle within two cells), and *adjacent* when it is
+//! a corner or shares a triangle edge with one. Self-collision leaves only
+//! adjacent pairs to the springs (and, on a grid, the smooth sheet around
+//! each triangle); the self-intersection count skips near ones. Also the
+//! triangles' edges, once each.
 
 use crate::cloth::{SpringKind, Topology};
 
@@ -15,6 +17,11 @@ pub(crate) struct MeshNeighbours {
     joined_start: Vec<u32>,
     /// Spring partners, ascending per particle.
     joined: Vec<u32>,
+    /// Per particle: where its partners along triangle edges start in
+    /// `ring` (one more entry than particles).
+    ring_start: Vec<u32>,
+    /// Partners along triangle edges (the one-ring), ascending per particle.
+    ring: Vec<u32>,
     /// Per particle `i`: where the far ends `j > i` of its triangle edges
     /// start in `edges` (one more entry than particles).
     edge_start: Vec<u32>,
@@ -57,7 +64,8 @@ impl MeshNeighbours {
         let edges = topology.triangles.iter().flat_map(|t| {
             [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])].map(|(a, b)| (a.min(b), a.max(b)))
         });
-        (self.edge_start, self.edges) = compressed(n, edges);
+        (self.edge_start, self.edges) = compressed(n, edges.clone());
+        (self.ring_start, self.ring) = compressed(n, edges.flat_map(|(a, b)| [(a, b), (b, a)]));
         let mut all: Vec<(u32, u32)> = topology
             .triangles
             .iter()
@@ -101,6 +109,23 @@ impl MeshNeighbours {
         }
         let joined = self.joined_to(p);
         tri.iter().any(|c| joined.binary_search(c).is_ok())
+    }
+
+    /// True when particle `p` is a corner of triangle `tri` or shares a
+    /// triangle edge with one of its corners: the pairs self-collision
+    /// leaves to the springs. Closer than [`MeshNeighbours::near`], which
+    /// spares bend partners too (two cells on a grid): a crumple that
+    /// folds within two cells is then still kept from crossing itself.
+    pub fn adjacent(&self, p: u32, tri: [u32; 3]) -> bool {
+        if tri.contains(&p) {
+            return true;
+        }
+        let p = p as usize;
+        let ring = match (self.ring_start.get(p), self.ring_start.get(p + 1)) {
+            (Some(&s), Some(&e)) => &self.ring[s as usize..e as usize],
+            _ => &[],
+        };
+        tri.iter().any(|c| ring.binary_search(c).is_ok())
     }
 
     /// The longest stretch or shear spring's rest length, in metres.

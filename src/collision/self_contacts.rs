@@ -137,7 +137,7 @@ impl Look<'_> {
                 return;
             }
             let [u, v, w] = barycentric(xp - n * d - a, e1, e2);
-            if u < -slack[0] || v < -slack[1] || w < -slack[2] || neighbours.near(p, tri) {
+            if u < -slack[0] || v < -slack[1] || w < -slack[2] || neighbours.adjacent(p, tri) {
                 return;
             }
             out.push(SelfPair {
