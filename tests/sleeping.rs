@@ -7,7 +7,9 @@ use cloth3d::scenes::{Scene, SceneKind, SceneOptions};
 mod common;
 use common::bits;
 
-/// A 24 × 24 drape with sleeping on, stepped until it sleeps (at most 15 s).
+/// A 24 × 24 drape with sleeping on, stepped until it sleeps (at most
+/// 20 s; measured: it falls asleep at frame 933, 15.6 s, as its skirt's
+/// last slow creep over the ball stops).
 fn settled_drape() -> Scene {
     let mut scene = Scene::build(
         SceneKind::Drape,
@@ -18,7 +20,7 @@ fn settled_drape() -> Scene {
     )
     .unwrap();
     scene.solver.settings.sleep = true;
-    for _ in 0..900 {
+    for _ in 0..1200 {
         if scene.step_frame().unwrap().asleep {
             return scene;
         }

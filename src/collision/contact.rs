@@ -158,21 +158,23 @@ fn to_world(pose: &PoseF64, point: DVec3, normal: DVec3, signed: f64) -> Option<
 
 /// A ball, analytically: `c + r (p - c)/|p - c|`; the centre pushes out
 /// along the world's up. A ball looks the same however it is turned, so the
-/// query stays in world coordinates: no rotation there and back.
+/// query stays in world coordinates, and in single precision: double
+/// precision guards the other shapes' rotation there and back, which a
+/// ball does not need.
 #[inline]
 fn ball_contact(radius: f32, pose: &PoseF64, point: Vector) -> Option<Contact> {
-    let offset = point.as_dvec3() - pose.t;
-    let r = radius as f64;
+    let centre = pose.pose.translation;
+    let offset = point - centre;
     let dist = offset.length();
-    let normal = if dist > 1e-12 {
+    let normal = if dist > 1e-9 {
         offset / dist
     } else {
-        DVec3::Y
+        Vector::Y
     };
     let contact = Contact {
-        point: (pose.t + normal * r).as_vec3(),
-        normal: normal.as_vec3(),
-        signed_distance: (dist - r) as f32,
+        point: centre + normal * radius,
+        normal,
+        signed_distance: dist - radius,
     };
     (contact.point.is_finite() && contact.normal.is_finite() && contact.signed_distance.is_finite())
         .then_some(contact)
