@@ -12,9 +12,9 @@ use crate::math::Vector;
 /// coordinates (`vt`), vertex normals (`vn`) and faces (`f v/vt/vn`,
 /// counter-clockwise seen from the front). A grid cloth writes its cells as
 /// quads, each starting at a corner of the diagonal it is drawn split along,
-/// so that [`Cloth::from_mesh`] reads back its stretch springs (the cells'
-/// sides), its shear springs (both diagonals) and its masses; any other
-/// cloth (a mesh cloth, or a grid that has torn) writes its triangles.
+/// so that [`Cloth::from_mesh`] reads back its triangles, its stretch
+/// springs (the cells' sides) and its shear springs (both diagonals); any
+/// other cloth (a mesh cloth, or a grid that has torn) writes its triangles.
 pub fn obj_string(cloth: &Cloth) -> String {
     let mut out = String::with_capacity(cloth.particle_count() * 96);
     let _ = writeln!(

@@ -120,11 +120,7 @@ impl MeshNeighbours {
         if tri.contains(&p) {
             return true;
         }
-        let p = p as usize;
-        let ring = match (self.ring_start.get(p), self.ring_start.get(p + 1)) {
-            (Some(&s), Some(&e)) => &self.ring[s as usize..e as usize],
-            _ => &[],
-        };
+        let ring = row(&self.ring_start, &self.ring, p);
         tri.iter().any(|c| ring.binary_search(c).is_ok())
     }
 
@@ -155,20 +151,22 @@ impl MeshNeighbours {
 
     /// The particles joined to `p` by a spring, ascending.
     pub fn joined_to(&self, p: u32) -> &[u32] {
-        let p = p as usize;
-        match (self.joined_start.get(p), self.joined_start.get(p + 1)) {
-            (Some(&s), Some(&e)) => &self.joined[s as usize..e as usize],
-            _ => &[],
-        }
+        row(&self.joined_start, &self.joined, p)
     }
 
     /// The far ends `j > p` of the triangle edges at `p`, ascending.
     pub fn edges_from(&self, p: u32) -> &[u32] {
-        let p = p as usize;
-        match (self.edge_start.get(p), self.edge_start.get(p + 1)) {
-            (Some(&s), Some(&e)) => &self.edges[s as usize..e as usize],
-            _ => &[],
-        }
+        row(&self.edge_start, &self.edges, p)
+    }
+}
+
+/// Row `p` of compressed rows (`start` has one more entry than rows);
+/// empty for a row out of range.
+fn row<'a>(start: &[u32], list: &'a [u32], p: u32) -> &'a [u32] {
+    let p = p as usize;
+    match (start.get(p), start.get(p + 1)) {
+        (Some(&s), Some(&e)) => &list[s as usize..e as usize],
+        _ => &[],
     }
 }
 
