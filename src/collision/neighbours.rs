@@ -195,7 +195,8 @@ mod tests {
 
     /// On a grid: the corner's partners are its stretch, shear and bend
     /// springs' far ends; a particle three cells away is no neighbour of a
-    /// corner triangle; the triangle edges are each listed once.
+    /// corner triangle, a bend partner's triangle near but not adjacent;
+    /// the triangle edges are each listed once.
     #[test]
     fn grid_neighbours_and_edges() {
         let cloth = ClothBuilder::new(5, 5).build().unwrap();
@@ -210,6 +211,16 @@ mod tests {
             !nb.near(18, [0, 1, 6]),
             "(3, 3) is two cells from the triangle's nearest corner"
         );
+        // Adjacent is closer: sharing a triangle edge with a corner. (4, 0)
+        // is a bend partner of (4, 2) but shares no edge with the triangle
+        // (3, 3), (4, 2), (4, 3): near, not adjacent.
+        assert!(cloth.triangles().contains(&[18, 22, 23]));
+        assert!(nb.near(20, [18, 22, 23]) && !nb.adjacent(20, [18, 22, 23]));
+        assert!(
+            nb.adjacent(12, [0, 1, 6]),
+            "(2, 2) shares an edge with (1, 1)"
+        );
+        assert!(nb.adjacent(0, [0, 1, 6]) && !nb.adjacent(18, [0, 1, 6]));
         let edges: usize = (0..25).map(|p| nb.edges_from(p).len()).sum();
         // The 4 × 4 cells' outline.
         assert_eq!(nb.border_edges().len(), 16);
