@@ -147,11 +147,16 @@ fn local_f64(pose: &PoseF64, point: Vector) -> DVec3 {
 
 /// Back to world coordinates, in single precision.
 fn to_world(pose: &PoseF64, point: DVec3, normal: DVec3, signed: f64) -> Option<Contact> {
-    let contact = Contact {
+    finite(Contact {
         point: (pose.q.mul_vec3(point) + pose.t).as_vec3(),
         normal: pose.q.mul_vec3(normal).as_vec3(),
         signed_distance: signed as f32,
-    };
+    })
+}
+
+/// The contact, unless a non-finite input made any of it non-finite.
+#[inline]
+fn finite(contact: Contact) -> Option<Contact> {
     (contact.point.is_finite() && contact.normal.is_finite() && contact.signed_distance.is_finite())
         .then_some(contact)
 }
@@ -171,13 +176,11 @@ fn ball_contact(radius: f32, pose: &PoseF64, point: Vector) -> Option<Contact> {
     } else {
         Vector::Y
     };
-    let contact = Contact {
+    finite(Contact {
         point: centre + normal * radius,
         normal,
         signed_distance: dist - radius,
-    };
-    (contact.point.is_finite() && contact.normal.is_finite() && contact.signed_distance.is_finite())
-        .then_some(contact)
+    })
 }
 
 /// A cuboid, analytically: the clamp of the point to the box when outside,

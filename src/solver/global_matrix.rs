@@ -89,8 +89,14 @@ impl FactorHistory {
         self.key = Some(key);
         self.fresh.clear();
         self.updates.clear();
-        self.fresh.reserve(m);
-        self.updates.reserve(5 * m);
+        self.reserve(m);
+    }
+
+    /// Room for all a factor of `m` rows can record (see [`Self::start`]).
+    fn reserve(&mut self, m: usize) {
+        self.fresh.reserve(m.saturating_sub(self.fresh.len()));
+        self.updates
+            .reserve((5 * m).saturating_sub(self.updates.len()));
     }
 
     /// Records a full factorisation with the weights `contact`.
@@ -333,10 +339,7 @@ impl Factor {
             history.start(key, m);
             return Ok(());
         }
-        history.fresh.reserve(m.saturating_sub(history.fresh.len()));
-        history
-            .updates
-            .reserve((5 * m).saturating_sub(history.updates.len()));
+        history.reserve(m);
         if !history.fresh.is_empty() {
             let mut contact = vec![0.0; m];
             for &(r, w) in &history.fresh {
