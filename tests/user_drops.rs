@@ -165,8 +165,21 @@ fn a_tablecloth_dropped_on_a_table_drapes_without_stretching() {
                 .unwrap(),
         )
         .with_integrator(integrator);
-        run(&mut sim, &mut world, 120);
-        let stretch = sim.max_strain(SpringKind::Stretch);
+        // In every frame: over the table's corners the contacts push the
+        // cloth out along the corner's normal, away from its neighbours,
+        // and the stretch limit must hold against them. Implicit Euler's
+        // few large substeps leave more than the limit's passes undo as the
+        // skirt lands (5.7% in one frame, measured); it is held to the
+        // bound at rest.
+        let mut worst = 0.0f32;
+        for _ in 0..120 {
+            run(&mut sim, &mut world, 1);
+            worst = worst.max(sim.max_strain(SpringKind::Stretch));
+        }
+        let stretch = match integrator {
+            Integrator::ImplicitEuler => sim.max_strain(SpringKind::Stretch),
+            _ => worst,
+        };
         assert!(stretch < 0.05, "{integrator}: stretched {stretch}");
         // On the table: its middle rests on the top, its skirt hangs down.
         let middle = sim.positions()[sim.index(24, 24).unwrap()];

@@ -23,6 +23,7 @@ mod self_contacts;
 mod self_intersections;
 mod spatial_hash;
 mod stage;
+mod stretch_hold;
 mod tracks;
 
 pub use contact::{contact, penetration_depth, Contact};

@@ -26,6 +26,9 @@ pub(crate) struct ResolveOptions<'a> {
     pub friction: FrictionPolicy,
     /// Keep stretch and shear springs out of the obstacles too.
     pub edges: bool,
+    /// The material's stretch limit (times the rest length; infinite for
+    /// none), held once more against the contacts.
+    pub stretch_limit: f32,
     /// The threads that resolve blocks of particles.
     pub team: Team<'a>,
 }
@@ -47,13 +50,15 @@ pub struct CollisionStage {
     pub(super) distance: Vec<f32>,
     /// Per particle: moved by the edge pass in this substep.
     pub(super) edge_moved: Vec<bool>,
+    /// The particles the stretch limit moved in a round (`stretch_hold.rs`).
+    pub(super) held: Vec<u32>,
     /// Per block of the particle pass: its scratch.
     blocks: Vec<BlockScratch>,
     /// Per block of [`EDGE_BLOCK`] springs: those the edge pass must look at.
     edge_blocks: Vec<EdgeList>,
     /// The stretch and shear springs that may come near an obstacle this
     /// step, in spring order ([`CollisionStage::cache_candidates`]).
-    edge_watch: Vec<u32>,
+    pub(super) edge_watch: Vec<u32>,
 }
 
 /// The springs of a block of the edge pass that it must look at, alone on
@@ -79,6 +84,8 @@ impl CollisionStage {
         self.normal.resize(particles, Vector::ZERO);
         self.distance.resize(particles, f32::INFINITY);
         self.edge_moved.resize(particles, false);
+        self.held.clear();
+        self.held.reserve(particles);
         self.contacts.begin_step(particles, obstacles.len());
     }
 
@@ -293,12 +300,14 @@ impl CollisionStage {
                 imp.contacts += 1;
             }
         }
+        // A stray particle may meet an obstacle along any spring.
+        let watched = strays == 0 && !self.tracks.cache_is_empty();
         if options.edges {
-            // A stray particle may meet an obstacle along any spring.
-            let watched = strays == 0 && !self.tracks.cache_is_empty();
             let team = options.team;
             self.resolve_edges(particles, springs, obstacles, (thickness, team, watched));
         }
+        let limit = (options.stretch_limit, thickness, watched);
+        self.hold_stretch_limit(particles, springs, obstacles, limit);
         contacts
     }
 
@@ -398,7 +407,7 @@ impl CollisionStage {
     /// Moves the point `x` out to the thickness of every obstacle it is
     /// inside; with a velocity, also takes away its part into each surface.
     /// Returns how far it moved along the normals, in metres.
-    fn move_out(
+    pub(super) fn move_out(
         &mut self,
         x: &mut Vector,
         mut v: Option<&mut Vector>,

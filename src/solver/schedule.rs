@@ -11,7 +11,8 @@
 //!               substep) → stretch limit (solvers that do not hold it in
 //!               their own substep, and every solver with self-collision)
 //!               → tethers (cloths with them) → resolve contacts (with the
-//!               friction policy the integrator handed back)
+//!               friction policy the integrator handed back) → the stretch
+//!               limit once more, against the contacts
 //! divergence check → roll back and report, or commit the time
 //!     → tearing (cloths whose material tears: split the particles at the
 //!       ends of overstrained stretch springs)
@@ -268,6 +269,7 @@ impl ClothSolver {
                 ResolveOptions {
                     friction: outcome.friction,
                     edges,
+                    stretch_limit: cloth.material.stretch_limit_factor(),
                     team,
                 },
             );

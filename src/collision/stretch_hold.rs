@@ -1,0 +1,102 @@
+//! The stretch limit held against the contacts. The solvers shorten every
+//! stretch spring to the material's limit before the contacts, and the
+//! contacts win where the two disagree. But a contact pushes a particle out
+//! along the obstacle's normal, which at a box's corner or edge points away
+//! from its neighbours: cloth draped over a table's corner ended 6%
+//! stretched under a 4.5% limit (measured), though it could lie
+//! within the limit outside the table. This pass shortens the stretch
+//! springs with an end near an obstacle once more, then pushes every
+//! particle it moved back out of the obstacles; a few rounds let the
+//! neighbours slide round the corner to where both hold.
+
+use super::contact_set::NONE;
+use super::obstacle::Obstacle;
+use super::stage::CollisionStage;
+use crate::cloth::{Particles, SpringKind, Springs};
+
+/// Rounds of shortening and pushing out at most; they stop when no spring
+/// near an obstacle is over the limit.
+const ROUNDS: usize = 4;
+
+impl CollisionStage {
+    /// Shortens to `factor` times their rest length the stretch `springs`
+    /// with an end near an obstacle (the watched ones, when `watched`), each
+    /// end moving by its inverse mass and losing the velocity that still
+    /// stretches the spring; then moves each particle it moved back out to
+    /// `thickness` of the obstacles. Returns the springs shortened.
+    pub(super) fn hold_stretch_limit(
+        &mut self,
+        particles: &mut Particles,
+        springs: &Springs,
+        obstacles: &[Obstacle],
+        (factor, thickness, watched): (f32, f32, bool),
+    ) -> u32 {
+        if !factor.is_finite() {
+            return 0;
+        }
+        let stretch = springs.range(SpringKind::Stretch);
+        // The watched springs are in spring order, stretch first.
+        let count = if watched {
+            self.edge_watch
+                .partition_point(|&s| (s as usize) < stretch.end)
+        } else {
+            stretch.len()
+        };
+        let mut shortened = 0;
+        for _ in 0..ROUNDS {
+            self.held.clear();
+            for k in 0..count {
+                let s = if watched {
+                    self.edge_watch[k] as usize
+                } else {
+                    stretch.start + k
+                };
+                let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
+                if self.nearest[a] == NONE && self.nearest[b] == NONE {
+                    continue;
+                }
+                let Particles { x, v, inv_mass, .. } = &mut *particles;
+                let (wa, wb) = (inv_mass[a], inv_mass[b]);
+                let w = wa + wb;
+                let d = x[b] - x[a];
+                let limit = springs.rest[s] * factor;
+                let len2 = d.length_squared();
+                // Also false for a NaN length.
+                if !(len2 > limit * limit) || w == 0.0 {
+                    continue;
+                }
+                let len = len2.sqrt();
+                let n = d / len;
+                let step = n * ((len - limit) / w);
+                x[a] += step * wa;
+                x[b] -= step * wb;
+                let separating = (v[b] - v[a]).dot(n);
+                if separating > 0.0 {
+                    let dv = n * (separating / w);
+                    v[a] += dv * wa;
+                    v[b] -= dv * wb;
+                }
+                for (i, wi) in [(a, wa), (b, wb)] {
+                    if wi != 0.0 && !self.edge_moved[i] {
+                        self.edge_moved[i] = true;
+                        self.held.push(i as u32);
+                    }
+                }
+                shortened += 1;
+            }
+            if self.held.is_empty() {
+                break;
+            }
+            // The contacts still win: every particle moved ends outside.
+            let held = std::mem::take(&mut self.held);
+            for &i in &held {
+                let i = i as usize;
+                self.edge_moved[i] = false;
+                let (x, v) = (&mut particles.x[i], &mut particles.v[i]);
+                self.move_out(x, Some(v), obstacles, thickness);
+            }
+            self.held = held;
+        }
+        shortened
+    }
+}
