@@ -527,7 +527,7 @@ fn the_tethers_flag_holds_the_curtain() {
 #[test]
 fn the_sleep_flag_lets_a_settled_drape_sleep() {
     let run = |extra: &[&str]| {
-        // It falls asleep at frame 933.
+        // It falls asleep at frame 885.
         let mut args = vec!["run", "drape", "--n", "24", "--frames", "1200", "--json"];
         args.extend_from_slice(extra);
         let v: serde_json::Value = serde_json::from_str(cloth3d_ok(&args).trim()).unwrap();

@@ -8,7 +8,7 @@ mod common;
 use common::bits;
 
 /// A 24 × 24 drape with sleeping on, stepped until it sleeps (at most
-/// 20 s; measured: it falls asleep at frame 933, 15.6 s, as its skirt's
+/// 20 s; measured: it falls asleep at frame 885, 14.8 s, as its skirt's
 /// last slow creep over the ball stops).
 fn settled_drape() -> Scene {
     let mut scene = Scene::build(
