@@ -70,8 +70,9 @@ impl CollisionStage {
                 let d = x[b] - x[a];
                 let limit = springs.rest[s] * factor;
                 let len2 = d.length_squared();
-                // Also false for a NaN length.
-                if !(len2 > limit * limit) || w == 0.0 {
+                // Also false for a length that is not a number.
+                let over = len2 > limit * limit;
+                if !over || w == 0.0 {
                     continue;
                 }
                 let len = len2.sqrt();
