@@ -27,7 +27,7 @@ fn count(cloth: &Cloth, kind: SpringKind) -> usize {
 }
 
 /// Four quads: 12 sides (stretch), 8 diagonals (shear), one bend across
-/// each of the 4 interior sides; a third of each triangle's area per corner.
+/// each of the 4 interior sides; a quarter of each quad's area per corner.
 #[test]
 fn a_quad_mesh_gets_the_springs_of_a_grid_and_masses_from_its_areas() {
     let cloth = Cloth::from_mesh(&four_quads(), Material::cotton(), MassSpec::Total(4.0)).unwrap();
@@ -51,12 +51,13 @@ fn a_quad_mesh_gets_the_springs_of_a_grid_and_masses_from_its_areas() {
         }),
         "{bends:?}"
     );
-    // Masses: 4 kg over 4 m²; the middle vertex has four quads' worth of
-    // triangles, a corner one triangle of one quad.
+    // Masses: 4 kg over four quads of 1 m²; the middle vertex carries a
+    // quarter of each of four quads, a side's middle of two, a corner of one.
     let m = cloth.masses();
     assert!((m.iter().sum::<f32>() - 4.0).abs() < 1e-5);
-    assert!((m[4] - 1.0).abs() < 1e-5, "{}", m[4]);
-    assert!(m[0] > 0.1 && m[0] < m[1] && m[1] < m[4], "{m:?}");
+    for (i, expected) in [(4, 1.0), (1, 0.5), (3, 0.5), (0, 0.25), (8, 0.25)] {
+        assert!((m[i] - expected).abs() < 1e-5, "vertex {i}: {m:?}");
+    }
     assert_eq!(cloth.uvs()[8], [1.0, 1.0]);
     // It steps like any cloth.
     let mut sim = Simulation::new(cloth);
@@ -145,12 +146,10 @@ f 2/2 5/5 3/3
 }
 
 /// A grid cloth written as OBJ and read back as a mesh cloth is the same
-/// cloth but for its masses: the same particles where they were, the same
-/// texture coordinates, triangles, stretch springs (the cells' sides) and
-/// shear springs (both diagonals of each cell), whichever way each cell is
-/// split, and the same total mass. The grid spreads its mass evenly over its
-/// particles, the mesh by area: a border particle of the mesh weighs half
-/// an inner one, a corner a quarter (to be made one rule: issue 18).
+/// cloth: the same particles where they were, the same masses (both share
+/// each cell's, or quad's, among its four corners), texture coordinates,
+/// triangles, stretch springs (the cells' sides) and shear springs (both
+/// diagonals of each cell), whichever way each cell is split.
 #[cfg(feature = "scene-files")]
 #[test]
 fn a_grid_written_as_obj_reads_back_as_the_same_cloth() {
@@ -191,6 +190,15 @@ fn a_grid_written_as_obj_reads_back_as_the_same_cloth() {
         );
         let total = grid.total_mass();
         assert!((read.total_mass() - total).abs() <= 1e-5 * total);
+        for (i, (a, b)) in read.masses().iter().zip(grid.masses()).enumerate() {
+            assert!(
+                (a - b).abs() <= 1e-5 * b,
+                "mass of particle {i}: {a} against {b}"
+            );
+        }
+        // Area-shared: a corner carries a quarter of an inner particle.
+        let m = grid.masses();
+        assert!((4.0 * m[0] - m[7 + 1]).abs() <= 1e-5 * m[7 + 1], "{m:?}");
         for (i, (a, b)) in read.uvs().iter().zip(grid.uvs()).enumerate() {
             let off = (a[0] - b[0]).abs().max((a[1] - b[1]).abs());
             assert!(off < 1e-6, "uv of particle {i}: {a:?} against {b:?}");

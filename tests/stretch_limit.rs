@@ -25,17 +25,27 @@ fn landing_stretch(integrator: Integrator, material: Material) -> f32 {
     worst
 }
 
+/// Cotton, and a cotton whose stretch springs are half as stiff (the
+/// limit is the material's, whatever its springs): the landing holds both
+/// within the limit, and the softer one without it stretches further.
 #[test]
 fn cotton_stays_within_its_stretch_limit_through_the_landing() {
     let cotton = Material::cotton();
     assert_eq!(cotton.stretch_limit, Some(WOVEN_STRETCH_LIMIT));
+    let mut soft = cotton.clone();
+    soft.stretch.stiffness *= 0.5;
     for integrator in [Integrator::Xpbd, Integrator::SymplecticEuler] {
-        let limited = landing_stretch(integrator, cotton.clone());
-        let free = landing_stretch(integrator, cotton.clone().with_stretch_limit(None));
-        // The limit is held after every substep; the contact pass after it
-        // may stretch a spring by a hair.
-        assert!(limited < 0.05, "{integrator}: {limited}");
-        // Without it the same landing stretches further: the limit acts.
+        // The limit is held after every substep and again after the
+        // contacts, which may still stretch a spring by a hair.
+        for material in [&cotton, &soft] {
+            let limited = landing_stretch(integrator, material.clone());
+            assert!(limited < 0.05, "{integrator}: {limited}");
+        }
+        // Without it the same landing stretches further: the limit acts
+        // (measured on the soft one: 7.9% for xpbd and 9.3% for
+        // symplectic Euler; under 5% with it).
+        let limited = landing_stretch(integrator, soft.clone());
+        let free = landing_stretch(integrator, soft.clone().with_stretch_limit(None));
         assert!(
             free > limited + 0.005,
             "{integrator}: {free} without, {limited} with"

@@ -14,7 +14,8 @@ use crate::math::{Pose, Rotation, Vector};
 /// How the mass of a grid cloth is given.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum MassSpec {
-    /// Total mass in kg, spread evenly over the particles.
+    /// Total mass in kg, spread by area: each particle carries its share
+    /// of the cells (or faces) it is a corner of.
     Total(f32),
     /// From the material's areal density (kg/m²) times the area.
     FromDensity,
@@ -100,7 +101,8 @@ impl ClothBuilder {
         self
     }
 
-    /// Total mass in kg, spread evenly.
+    /// Total mass in kg, spread by area: an inner particle carries a cell's
+    /// worth, a border particle half that, a corner a quarter.
     pub fn total_mass(mut self, mass: f32) -> Self {
         self.mass = MassSpec::Total(mass);
         self
@@ -176,7 +178,15 @@ impl ClothBuilder {
             MassSpec::Total(m) => positive("total mass", m)?,
             MassSpec::FromDensity => self.material.density * self.width * self.height,
         };
-        let particle_mass = positive("particle mass", total / n as f32)?;
+        // Each cell's mass is shared by its four corners: an inner particle
+        // carries a cell's worth of cloth, one on the border half, a corner
+        // a quarter (the masses a mesh cloth of the same cells gets).
+        let cells = (cols - 1) * (rows - 1);
+        let cell_mass = positive("particle mass", total / cells as f32)?;
+        let border = |i: usize, last: usize| if i == 0 || i == last { 0.5 } else { 1.0 };
+        let masses = (0..n)
+            .map(|i| cell_mass * border(i % cols, cols - 1) * border(i / cols, rows - 1))
+            .collect();
         let (dx, dz) = (
             self.width / (cols - 1) as f32,
             self.height / (rows - 1) as f32,
@@ -204,13 +214,7 @@ impl ClothBuilder {
                 kind,
             })
             .collect();
-        let mut cloth = Cloth::from_parts(
-            positions,
-            vec![particle_mass; n],
-            springs,
-            triangles,
-            self.material,
-        )?;
+        let mut cloth = Cloth::from_parts(positions, masses, springs, triangles, self.material)?;
         let topology = Arc::make_mut(&mut cloth.topology);
         topology.uvs = uvs;
         topology.grid = Some(Grid { cols, rows });

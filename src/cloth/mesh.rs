@@ -2,8 +2,10 @@
 //! artist's OBJ holds them) instead of a grid. Stretch springs run along
 //! the polygons' sides, shear springs across both diagonals of each quad,
 //! and bend springs across every interior side, between the two corners
-//! facing it; each particle weighs a third of its triangles' area (times
-//! the density, or scaled to a total mass).
+//! facing it; each face's area is shared equally by its corners, a third
+//! of a triangle's and a quarter of a quad's, and a particle weighs its
+//! share times the density (or scaled to a total mass). A grid's cells
+//! share theirs the same way, so a grid read back as a mesh weighs the same.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -99,13 +101,18 @@ impl Cloth {
         }
         let (triangles, quads) = mesh.triangles()?;
         let x = &mesh.positions;
-        // Masses: a third of each triangle's area to each corner.
+        // Masses: each face's area (a quad's is its two triangles') shared
+        // equally by its corners.
         let mut area = vec![0.0f32; n];
-        for t in &triangles {
-            let [a, b, c] = t.map(|i| x[i as usize]);
-            let third = (b - a).cross(c - a).length() / 6.0;
-            for &i in t {
-                area[i as usize] += third;
+        for face in &mesh.faces {
+            let (first, k) = (x[face[0] as usize], face.len());
+            let mut face_area = 0.0;
+            for w in face[1..].windows(2) {
+                let (b, c) = (x[w[0] as usize], x[w[1] as usize]);
+                face_area += (b - first).cross(c - first).length() / 2.0;
+            }
+            for &i in face {
+                area[i as usize] += face_area / k as f32;
             }
         }
         if let Some(i) = area.iter().position(|&a| a.is_nan() || a <= 0.0) {

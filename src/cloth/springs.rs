@@ -63,6 +63,10 @@ pub struct Springs {
     /// Per kind: the most springs of that kind at any one particle.
     #[serde(default)]
     pub(crate) max_degree: [u32; 3],
+    /// Per particle, per kind: the springs of that kind at the particle
+    /// (empty when read from a snapshot written before it was kept).
+    #[serde(default)]
+    pub(crate) degree: Vec<[u32; 3]>,
 }
 
 /// Greedy colouring of the springs, kind by kind: each spring gets the lowest
@@ -134,17 +138,18 @@ impl Springs {
             .map(|s| s.a.max(s.b) as usize + 1)
             .max()
             .unwrap_or(0);
-        let mut max_degree = [0u32; 3];
-        for kind in SpringKind::ALL {
-            let mut degree = vec![0u32; n];
-            for s in list.iter().filter(|s| s.kind == kind) {
-                degree[s.a as usize] += 1;
-                degree[s.b as usize] += 1;
-            }
-            max_degree[kind.index()] = degree.into_iter().max().unwrap_or(0);
+        let mut degree = vec![[0u32; 3]; n];
+        for s in &list {
+            degree[s.a as usize][s.kind.index()] += 1;
+            degree[s.b as usize][s.kind.index()] += 1;
         }
+        let max_degree = SpringKind::ALL.map(|kind| {
+            let k = kind.index();
+            degree.iter().map(|d| d[k]).max().unwrap_or(0)
+        });
         Self {
             max_degree,
+            degree,
             a: list.iter().map(|s| s.a).collect(),
             b: list.iter().map(|s| s.b).collect(),
             rest: list.iter().map(|s| s.rest_length).collect(),

@@ -130,7 +130,7 @@ pub struct ClothDesc {
     pub size: (f32, f32),
     /// Where the cloth starts.
     pub placement: Placement,
-    /// Total mass in kg, spread evenly; `None` takes it from the material's
+    /// Total mass in kg, spread by area (each cell's shared by its corners); `None` takes it from the material's
     /// areal density times the area.
     #[serde(
         default = "default_mass",

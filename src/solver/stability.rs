@@ -5,27 +5,60 @@ use super::integrator::Integrator;
 use crate::cloth::{Cloth, SpringKind};
 
 /// Upper bounds on the squared highest angular frequency (1/s²) and on the
-/// highest damping rate (1/s) of the cloth, by Gershgorin's theorem: at any
-/// particle, twice the stiffness (damping) of the springs that can meet there
-/// over the lightest free mass. Allocates nothing.
+/// highest damping rate (1/s) of the cloth, by Gershgorin's theorem: the
+/// largest, over the free particles, of twice the stiffness (damping) of
+/// the springs that meet there over the particle's mass. Per particle,
+/// because a grid's border particles carry less cloth than the inner ones
+/// but fewer springs too. Allocates nothing.
 pub fn stiffness_bounds(cloth: &Cloth) -> (f32, f32) {
     let springs = cloth.springs();
-    let max_inv_mass = cloth
-        .inverse_masses()
-        .iter()
-        .copied()
-        .fold(0.0f32, f32::max);
+    let inv_mass = cloth.inverse_masses();
+    let params = SpringKind::ALL.map(|kind| cloth.material.params(kind));
+    // Stiffness and damping (N/m, N·s/m) of the springs at a particle of `degree`.
+    let sums = |degree: &[u32; 3]| {
+        let (mut k, mut c) = (0.0f32, 0.0f32);
+        for (sp, &d) in params.iter().zip(degree) {
+            k += sp.stiffness * d as f32;
+            c += sp.damping * d as f32;
+        }
+        (k, c)
+    };
     let (mut k, mut c) = (0.0f32, 0.0f32);
-    for kind in SpringKind::ALL {
-        let sp = cloth.material.params(kind);
-        let degree = springs.max_degree[kind.index()] as f32;
-        k += sp.stiffness * degree;
-        c += sp.damping * degree;
+    if springs.degree.is_empty() && !springs.is_empty() {
+        // A snapshot from before the degrees were kept: the most springs
+        // of each kind at any particle, over the lightest free mass.
+        let w = inv_mass.iter().copied().fold(0.0f32, f32::max);
+        let (ks, cs) = sums(&springs.max_degree);
+        (k, c) = (ks * w, cs * w);
     }
-    (
-        2.0 * k * max_inv_mass,
-        2.0 * c * max_inv_mass + cloth.params.air_drag,
-    )
+    for (degree, &w) in springs.degree.iter().zip(inv_mass) {
+        let (ks, cs) = sums(degree);
+        (k, c) = (k.max(ks * w), c.max(cs * w));
+    }
+    (2.0 * k, 2.0 * c + cloth.params.air_drag)
+}
+
+/// The stiffness bound (1/s²) the small-steps solver's substep follows: as
+/// [`stiffness_bounds`], but with the mean free mass for every particle's.
+/// Its sweeps are stable at any step; the substep sets how stiff the bulk
+/// of the cloth is, not what a light particle at its border needs.
+fn bulk_stiffness(cloth: &Cloth) -> f32 {
+    let springs = cloth.springs();
+    let (mut free, mut mass) = (0u32, 0.0f64);
+    for (&m, &w) in cloth.masses().iter().zip(cloth.inverse_masses()) {
+        if w != 0.0 {
+            free += 1;
+            mass += m as f64;
+        }
+    }
+    if free == 0 {
+        return 0.0;
+    }
+    let mut k = 0.0f32;
+    for kind in SpringKind::ALL {
+        k += cloth.material.params(kind).stiffness * springs.max_degree[kind.index()] as f32;
+    }
+    2.0 * k * (free as f64 / mass) as f32
 }
 
 /// How many times the symplectic stability limit the small-steps solver's
@@ -57,7 +90,7 @@ pub fn stable_substep(cloth: &Cloth, integrator: Integrator) -> f32 {
         // Stable at any step; the stiffness converges with the substeps.
         // Damping takes no substeps here: the sweep treats it implicitly,
         // with the springs (a heavily damped cloth steps as fast as a light one).
-        Integrator::Xpbd => XPBD_REACH * 2.0 / omega2.sqrt(),
+        Integrator::Xpbd => XPBD_REACH * 2.0 / bulk_stiffness(cloth).sqrt(),
         Integrator::ExplicitEuler => {
             let ratio = SpringKind::ALL
                 .iter()
