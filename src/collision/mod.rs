@@ -35,3 +35,4 @@ pub use self_contacts::SelfContacts;
 pub use self_intersections::self_intersections;
 pub use stage::CollisionStage;
 pub(crate) use stage::ResolveOptions;
+pub(crate) use stretch_hold::stop_separating;

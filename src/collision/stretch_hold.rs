@@ -16,6 +16,7 @@ use super::contact_set::NONE;
 use super::obstacle::Obstacle;
 use super::stage::CollisionStage;
 use crate::cloth::{Particles, SpringKind, Springs};
+use crate::math::Vector;
 
 /// Rounds of shortening and pushing out at most; they stop when no spring
 /// near an obstacle is over the limit.
@@ -80,12 +81,7 @@ impl CollisionStage {
                 let step = n * ((len - limit) / w);
                 x[a] += step * wa;
                 x[b] -= step * wb;
-                let separating = (v[b] - v[a]).dot(n);
-                if separating > 0.0 {
-                    let dv = n * (separating / w);
-                    v[a] += dv * wa;
-                    v[b] -= dv * wb;
-                }
+                stop_separating(v, (a, b), n, (wa, wb));
                 for (i, wi) in [(a, wa), (b, wb)] {
                     if wi != 0.0 && !self.edge_moved[i] {
                         self.edge_moved[i] = true;
@@ -108,5 +104,24 @@ impl CollisionStage {
             self.held = held;
         }
         shortened
+    }
+}
+
+/// Takes away the velocity with which particles `a` and `b` (inverse
+/// masses `wa`, `wb`, not both zero) still separate along the unit vector
+/// `n` from `a` to `b`, each by its inverse mass: an inelastic stop, which
+/// keeps their momentum and never adds energy.
+#[inline]
+pub(crate) fn stop_separating(
+    v: &mut [Vector],
+    (a, b): (usize, usize),
+    n: Vector,
+    (wa, wb): (f32, f32),
+) {
+    let separating = (v[b] - v[a]).dot(n);
+    if separating > 0.0 {
+        let dv = n * (separating / (wa + wb));
+        v[a] += dv * wa;
+        v[b] -= dv * wb;
     }
 }

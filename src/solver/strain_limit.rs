@@ -14,6 +14,7 @@
 //! 30% and limited to 5% ended with a spring at 53%).
 
 use crate::cloth::{SpringKind, Springs};
+use crate::collision::stop_separating;
 use crate::math::Vector;
 
 /// Gauss–Seidel passes at most; they stop as soon as none is over the limit.
@@ -52,13 +53,7 @@ pub(crate) fn limit_stretch(
             x[i] += di;
             x[j] += dj;
             if let Some(v) = v.as_deref_mut() {
-                let n = d / len;
-                let separating = (v[j] - v[i]).dot(n);
-                if separating > 0.0 {
-                    let dv = n * (separating / w);
-                    v[i] += dv * inv_mass[i];
-                    v[j] -= dv * inv_mass[j];
-                }
+                stop_separating(v, (i, j), d / len, (inv_mass[i], inv_mass[j]));
             }
             over += 1;
         }
