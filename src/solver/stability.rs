@@ -13,16 +13,7 @@ use crate::cloth::{Cloth, SpringKind};
 pub fn stiffness_bounds(cloth: &Cloth) -> (f32, f32) {
     let springs = cloth.springs();
     let inv_mass = cloth.inverse_masses();
-    let params = SpringKind::ALL.map(|kind| cloth.material.params(kind));
-    // Stiffness and damping (N/m, N·s/m) of the springs at a particle of `degree`.
-    let sums = |degree: &[u32; 3]| {
-        let (mut k, mut c) = (0.0f32, 0.0f32);
-        for (sp, &d) in params.iter().zip(degree) {
-            k += sp.stiffness * d as f32;
-            c += sp.damping * d as f32;
-        }
-        (k, c)
-    };
+    let sums = |degree: &[u32; 3]| spring_sums(cloth, degree);
     let (mut k, mut c) = (0.0f32, 0.0f32);
     if springs.degree.is_empty() && !springs.is_empty() {
         // A snapshot from before the degrees were kept: the most springs
@@ -54,11 +45,20 @@ fn bulk_stiffness(cloth: &Cloth) -> f32 {
     if free == 0 {
         return 0.0;
     }
-    let mut k = 0.0f32;
-    for kind in SpringKind::ALL {
-        k += cloth.material.params(kind).stiffness * springs.max_degree[kind.index()] as f32;
-    }
+    let (k, _) = spring_sums(cloth, &springs.max_degree);
     2.0 * k * (free as f64 / mass) as f32
+}
+
+/// Stiffness and damping (N/m, N·s/m) of the springs at a particle with
+/// `degree` springs of each kind, of the cloth's material.
+fn spring_sums(cloth: &Cloth, degree: &[u32; 3]) -> (f32, f32) {
+    let (mut k, mut c) = (0.0f32, 0.0f32);
+    for (kind, &d) in SpringKind::ALL.iter().zip(degree) {
+        let sp = cloth.material.params(*kind);
+        k += sp.stiffness * d as f32;
+        c += sp.damping * d as f32;
+    }
+    (k, c)
 }
 
 /// How many times the symplectic stability limit the small-steps solver's
