@@ -618,11 +618,40 @@ fn run(seg: Segment, rest: &[f32], lambda: &mut [f32], lanes: &mut View, k: Comp
         chunk::<WIDTH>(a0 + done, b0 + done, rest, lambda, lanes, k);
         done += WIDTH;
     }
-    // The short last step, one spring at a time through the same arithmetic.
+    if done == len {
+        return;
+    }
+    // The short last step: a full step whose lanes past the run keep their
+    // values, when its lanes stay in the region and the two ends' lanes do
+    // not meet (each lane then read and written once); otherwise one spring
+    // at a time. Either way the same arithmetic for each spring, so the
+    // same bits; the masked step costs what a full one does, where the
+    // spring-at-a-time tail cost as much as the rest of a 16-spring run.
+    let (a, b, room) = (a0 + done, b0 + done, lanes.x.len());
+    if a.max(b) + WIDTH <= room && apart(a as u32, b as u32, WIDTH as u32) {
+        masked_chunk::<WIDTH>(a, b, len - done, rest, lambda, lanes, k);
+        return;
+    }
     while done < len {
         chunk::<1>(a0 + done, b0 + done, rest, lambda, lanes, k);
         done += 1;
     }
+}
+
+/// Projects the first `valid` of the `M` springs from lanes `a..a + M` to
+/// lanes `b..b + M`; the other lanes are written back unchanged.
+#[inline(always)]
+fn masked_chunk<const M: usize>(
+    a: usize,
+    b: usize,
+    valid: usize,
+    rest: &[f32],
+    lambda: &mut [f32],
+    lanes: &mut View,
+    k: Compliance,
+) {
+    let keep: [bool; M] = std::array::from_fn(|t| t >= valid);
+    project_chunk::<M>(a, b, rest, lambda, lanes, k, Some(&keep));
 }
 
 /// Projects the `M` springs from lanes `a..a + M` to lanes `b..b + M`.
@@ -635,6 +664,21 @@ fn chunk<const M: usize>(
     lanes: &mut View,
     k: Compliance,
 ) {
+    project_chunk::<M>(a, b, rest, lambda, lanes, k, None);
+}
+
+/// [`chunk`], leaving the lanes `keep` marks as they were (their springs
+/// are not projected).
+#[inline(always)]
+fn project_chunk<const M: usize>(
+    a: usize,
+    b: usize,
+    rest: &[f32],
+    lambda: &mut [f32],
+    lanes: &mut View,
+    k: Compliance,
+    keep: Option<&[bool; M]>,
+) {
     let load = |v: &[f32], at: usize| -> [f32; M] {
         let mut out = [0.0; M];
         out.copy_from_slice(&v[at..at + M]);
@@ -645,8 +689,15 @@ fn chunk<const M: usize>(
     let (sxa, sya, sza) = (load(lanes.sx, a), load(lanes.sy, a), load(lanes.sz, a));
     let (sxb, syb, szb) = (load(lanes.sx, b), load(lanes.sy, b), load(lanes.sz, b));
     let (wa, wb) = (load(lanes.w, a), load(lanes.w, b));
-    let r = load(rest, a);
+    let mut r = load(rest, a);
+    if let Some(keep) = keep {
+        // A rest length of 0: no spring, no change (`project`).
+        for c in 0..M {
+            r[c] = if keep[c] { 0.0 } else { r[c] };
+        }
+    }
     let mut l = load(lambda, a);
+    let old = keep.map(|_| (xa, ya, za, xb, yb, zb, l));
     for c in 0..M {
         let motion = [
             (xb[c] - sxb[c]) - (xa[c] - sxa[c]),
@@ -663,6 +714,16 @@ fn chunk<const M: usize>(
         );
         [xa[c], ya[c], za[c]] = na;
         [xb[c], yb[c], zb[c]] = nb;
+    }
+    if let (Some(keep), Some((oxa, oya, oza, oxb, oyb, ozb, ol))) = (keep, old) {
+        // Back as they were, bit for bit (a zero change can flip a zero's sign).
+        for c in 0..M {
+            if keep[c] {
+                (xa[c], ya[c], za[c]) = (oxa[c], oya[c], oza[c]);
+                (xb[c], yb[c], zb[c]) = (oxb[c], oyb[c], ozb[c]);
+                l[c] = ol[c];
+            }
+        }
     }
     lanes.x[a..a + M].copy_from_slice(&xa);
     lanes.y[a..a + M].copy_from_slice(&ya);
@@ -760,6 +821,62 @@ mod tests {
         // And the sweep did move them: the check can fail.
         let (_, mut fresh) = setup();
         assert_ne!(bits(&mut a), bits(&mut fresh));
+    }
+
+    #[test]
+    fn a_masked_last_step_gives_the_bits_of_one_spring_at_a_time() {
+        // A run of 11 springs from lanes 0.. to lanes 16..: one full step,
+        // then 3 springs in a masked step whose other 5 lanes hold springs
+        // of their own (rest lengths > 0) that must stay untouched.
+        let n = 32;
+        let arrays = || -> [Vec<f32>; 9] {
+            let f = |s: f32| (0..n).map(|i| (i as f32 * s).sin()).collect::<Vec<_>>();
+            [
+                f(0.37),
+                f(0.71),
+                f(1.13),
+                f(0.5),
+                f(0.9),
+                f(1.3),
+                (0..n).map(|i| if i % 7 == 0 { 0.0 } else { 2.0 }).collect(),
+                (0..n).map(|i| 0.1 + 0.01 * i as f32).collect(),
+                (0..n).map(|i| -0.001 * i as f32).collect(),
+            ]
+        };
+        let k = Compliance {
+            alpha: 0.3,
+            gamma: 0.2,
+        };
+        let seg = Segment {
+            a: 0,
+            b: 16,
+            len: 11,
+        };
+        let sweep = |masked: bool| {
+            let [mut x, mut y, mut z, sx, sy, sz, w, rest, mut lambda] = arrays();
+            let mut view = View {
+                x: &mut x,
+                y: &mut y,
+                z: &mut z,
+                sx: &sx,
+                sy: &sy,
+                sz: &sz,
+                w: &w,
+            };
+            if masked {
+                run(seg, &rest, &mut lambda, &mut view, k);
+            } else {
+                for t in 0..seg.len as usize {
+                    chunk::<1>(t, 16 + t, &rest, &mut lambda, &mut view, k);
+                }
+            }
+            [x, y, z, lambda].map(|v| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+        };
+        let (masked, single) = (sweep(true), sweep(false));
+        assert_eq!(masked, single);
+        let [x, ..] = arrays();
+        assert_ne!(masked[0][10], x[10].to_bits(), "the last spring moved");
+        assert_eq!(masked[0][11], x[11].to_bits(), "a masked lane stayed");
     }
 
     #[test]
