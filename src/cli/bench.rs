@@ -44,6 +44,27 @@ pub struct BenchRow {
     pub max_penetration: f32,
     /// rapier's frame time over this one's at the same N (cloth3d rows).
     pub speedup_vs_rapier: Option<f64>,
+    /// How a timed frame's wall time splits (cloth3d rows): medians over
+    /// the timed frames.
+    #[serde(default)]
+    pub split: Option<FrameSplit>,
+}
+
+/// How a frame's wall time splits among the stages (seconds, medians over
+/// the timed frames; see [`crate::solver::StageTimes`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FrameSplit {
+    /// The integrator's substeps: springs, forces and integration (s).
+    pub integrate_s: f64,
+    /// Obstacles and self-collision: detection, resolution, the edge pass,
+    /// the stretch limit held against the contacts (s).
+    pub collision_s: f64,
+    /// The stretch limit and tethers outside the integrator (s).
+    pub constraints_s: f64,
+    /// The small-steps solver (xpbd): its substep time per spring update
+    /// (springs × substeps × sweeps), in nanoseconds; the particle passes
+    /// of its substep (prediction, velocities) are counted in.
+    pub ns_per_spring: Option<f64>,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -82,15 +103,34 @@ pub fn bench_cloth3d(
         measure(&scene);
     }
     let mut times = Vec::with_capacity(frames as usize);
+    let mut stages: [Vec<f64>; 3] = Default::default();
     let mut substeps = 0;
     for _ in 0..frames {
         let start = Instant::now();
         let report = scene.step_frame()?;
         times.push(start.elapsed().as_secs_f64());
         substeps = report.substeps;
+        let t = report.times;
+        for (all, s) in
+            stages
+                .iter_mut()
+                .zip([t.integrate, t.contacts + t.self_collision, t.constraints])
+        {
+            all.push(s);
+        }
         measure(&scene);
     }
     let frame = median(times);
+    let [integrate_s, collision_s, constraints_s] = stages.map(median);
+    let sweeps = scene.solver.settings.xpbd_iterations as f64;
+    let updates = scene.cloth.springs().len() as f64 * substeps as f64 * sweeps;
+    let split = FrameSplit {
+        integrate_s,
+        collision_s,
+        constraints_s,
+        ns_per_spring: (integrator == Integrator::Xpbd && updates > 0.0)
+            .then(|| 1e9 * integrate_s / updates),
+    };
     let particles = scene.cloth.particle_count() as f64;
     let springs = scene.cloth.springs().len() as f64;
     let per_s = |x: f64| if frame > 0.0 { x / frame } else { 0.0 };
@@ -110,6 +150,7 @@ pub fn bench_cloth3d(
         max_stretch: stretch,
         max_penetration: deepest,
         speedup_vs_rapier: None,
+        split: Some(split),
     })
 }
 
@@ -191,6 +232,7 @@ pub fn bench_rapier_drape(n: usize, warmup: u32, frames: u32) -> BenchRow {
         max_stretch: stretch,
         max_penetration: penetration.max(0.0),
         speedup_vs_rapier: None,
+        split: None,
     }
 }
 
@@ -395,6 +437,7 @@ mod tests {
             max_stretch: 0.01,
             max_penetration: 0.0,
             speedup_vs_rapier: Some(6.0),
+            split: None,
         }
     }
 

@@ -21,6 +21,7 @@ mod settings;
 mod sleep;
 mod spring_space;
 mod stability;
+mod stage_times;
 mod staggered;
 mod state;
 mod strain_limit;
@@ -40,6 +41,7 @@ pub use report::{SolverCounters, StepReport, MAX_DISTANCE, MAX_SPEED, MAX_STRAIN
 pub use settings::SolverSettings;
 pub use sleep::{SleepState, CALM_STEPS, SLEEP_SPEED};
 pub use stability::{stable_substep, stable_substeps, stiffness_bounds};
+pub use stage_times::StageTimes;
 pub use state::SolverState;
 pub use substeps::{Substeps, MAX_SELF_SUBSTEP};
 pub use tearing::TearEvent;

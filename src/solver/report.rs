@@ -2,6 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::stage_times::StageTimes;
+
 /// Speeds (m/s) and distances from the origin (m) beyond which a step is
 /// taken to have exploded even if the numbers are still finite.
 pub const MAX_SPEED: f32 = 1.0e4;
@@ -32,6 +34,9 @@ pub struct StepReport {
     /// `SolverSettings::sleep`).
     #[serde(default)]
     pub asleep: bool,
+    /// Where the step's wall-clock time went.
+    #[serde(default)]
+    pub times: StageTimes,
 }
 
 /// What a solver has done since it was made.

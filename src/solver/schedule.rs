@@ -26,6 +26,7 @@ use super::cloth_solver::ClothSolver;
 use super::integrate::integrate;
 use super::report::{StepReport, MAX_DISTANCE, MAX_SPEED, MAX_STRAIN};
 use super::stability::stable_substeps;
+use super::stage_times::Lap;
 use super::strain_limit::limit_stretch;
 use super::substep::Substep;
 use super::substeps::{self_collision_substeps, MAX_SELF_SUBSTEP};
@@ -54,6 +55,7 @@ impl ClothSolver {
         dt: f32,
         obstacles: &[Obstacle],
     ) -> Result<StepReport, ClothError> {
+        let started = std::time::Instant::now();
         positive("dt", dt)?;
         self.settings.validate()?;
         cloth.params.validate()?;
@@ -81,10 +83,12 @@ impl ClothSolver {
                 .begin_step(obstacles, dt, cloth.params.thickness, n);
             cloth.time += dt as f64;
             self.steps += 1;
-            return Ok(StepReport {
+            let mut report = StepReport {
                 asleep: true,
                 ..Default::default()
-            });
+            };
+            report.times.total = started.elapsed().as_secs_f64();
+            return Ok(report);
         }
         let k = self.substeps_for(cloth, dt);
         if cloth.params.self_collision && dt / k as f32 > MAX_SELF_SUBSTEP {
@@ -145,6 +149,7 @@ impl ClothSolver {
         if self.settings.sleep {
             self.state.sleep.after_step(cloth);
         }
+        report.times.total = started.elapsed().as_secs_f64();
         Ok(report)
     }
 
@@ -166,6 +171,8 @@ impl ClothSolver {
             substeps: k,
             ..Default::default()
         };
+        let times = &mut report.times;
+        let mut watch = Lap::start();
         for substep in 0..k {
             let ctx = StepContext {
                 dt,
@@ -210,6 +217,7 @@ impl ClothSolver {
                 grid: cloth.topology.grid,
                 team,
             };
+            watch.lap(&mut times.contacts);
             let outcome = match integrate(&sub, x, v, &mut self.state, ws) {
                 Ok(outcome) => outcome,
                 Err(e) => {
@@ -217,6 +225,7 @@ impl ClothSolver {
                     return Err(e);
                 }
             };
+            watch.lap(&mut times.integrate);
             report.iterations += outcome.iterations;
             // Self-collision: before the stretch limit (a layer pushed off
             // another must not stretch the cloth past it) and the obstacles
@@ -237,6 +246,7 @@ impl ClothSolver {
                         h,
                     },
                 );
+                watch.lap(&mut times.self_collision);
             }
             // The stretch limit, for the integrators that do not hold it in
             // their own substep (and for all after self-collision, which
@@ -260,6 +270,7 @@ impl ClothSolver {
             if cloth.params.tethers {
                 ws.tethers.hold(&mut cloth.particles);
             }
+            watch.lap(&mut times.constraints);
             // Resolve contacts, by the friction policy the integrator handed back.
             report.contacts += ws.collision.resolve(
                 &ctx,
@@ -273,6 +284,7 @@ impl ClothSolver {
                     team,
                 },
             );
+            watch.lap(&mut times.contacts);
         }
         Ok(report)
     }

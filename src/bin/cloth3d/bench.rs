@@ -197,6 +197,7 @@ fn bench_rows(args: &BenchArgs, pools: &[Threads]) -> ExitCode {
         }
     }
     if !args.json {
+        print_split(&rows);
         let lines = cloth3d::cli::bench::target_lines(&rows);
         if !lines.is_empty() {
             emit("\ntargets (issues 7 and 16):\n");
@@ -214,4 +215,38 @@ fn bench_rows(args: &BenchArgs, pools: &[Threads]) -> ExitCode {
         }
     }
     ExitCode::SUCCESS
+}
+
+/// How the cloth3d rows' frames split among the stages, in ms a frame.
+fn print_split(rows: &[cloth3d::cli::bench::BenchRow]) {
+    let split: Vec<_> = rows
+        .iter()
+        .filter_map(|r| r.split.map(|s| (r, s)))
+        .collect();
+    if split.is_empty() {
+        return;
+    }
+    emit(&format!(
+        "\n{:<8} {:>5} {:<18} {:>3} {:>10} {:>10} {:>10} {:>10} {:>9}\n",
+        "split", "n", "integrator", "thr", "integrate", "collision", "limits", "rest", "ns/spring"
+    ));
+    for (row, s) in split {
+        let frame = row.frame_wall_s;
+        let rest = frame - s.integrate_s - s.collision_s - s.constraints_s;
+        emit(&format!(
+            "{:<8} {:>5} {:<18} {:>3} {:>10.2} {:>10.2} {:>10.2} {:>10.2} {:>9}\n",
+            row.scene,
+            row.n,
+            row.integrator,
+            row.threads,
+            1000.0 * s.integrate_s,
+            1000.0 * s.collision_s,
+            1000.0 * s.constraints_s,
+            1000.0 * rest,
+            s.ns_per_spring
+                .map(|ns| format!("{ns:.2}"))
+                .unwrap_or_else(|| "-".into()),
+        ));
+    }
+    emit("(ms a frame, medians over the timed frames; rest: the frame less the others)\n");
 }
