@@ -80,7 +80,9 @@ impl CollisionStage {
                         continue;
                     }
                     p.x[i] += push * w;
-                    self.edge_moved[i] = true;
+                    if !std::mem::replace(&mut self.edge_moved[i], true) {
+                        self.moved.push(i as u32);
+                    }
                     let surface_v = self.tracks.surface_velocity_of(obstacles, o, p.x[i]);
                     let vn = (p.v[i] - surface_v).dot(n);
                     if vn < 0.0 {

@@ -48,10 +48,11 @@ pub struct CollisionStage {
     pub(super) normal: Vec<Vector>,
     /// Per particle: distance to that obstacle after resolution (m).
     pub(super) distance: Vec<f32>,
-    /// Per particle: moved by the edge pass in this substep.
+    /// Per particle: listed in `moved`.
     pub(super) edge_moved: Vec<bool>,
-    /// The particles the stretch limit moved in a round (`stretch_hold.rs`).
-    pub(super) held: Vec<u32>,
+    /// The particles the edge pass moved, or the stretch limit in a round
+    /// (`stretch_hold.rs`), each once: those `edge_moved` marks.
+    pub(super) moved: Vec<u32>,
     /// Per block of the particle pass: its scratch.
     blocks: Vec<BlockScratch>,
     /// Per block of [`EDGE_BLOCK`] springs: those the edge pass must look at.
@@ -84,8 +85,8 @@ impl CollisionStage {
         self.normal.resize(particles, Vector::ZERO);
         self.distance.resize(particles, f32::INFINITY);
         self.edge_moved.resize(particles, false);
-        self.held.clear();
-        self.held.reserve(particles);
+        self.moved.clear();
+        self.moved.reserve(particles);
         self.contacts.begin_step(particles, obstacles.len());
     }
 
@@ -366,6 +367,7 @@ impl CollisionStage {
             0
         });
         let lists = std::mem::take(&mut self.edge_blocks);
+        self.moved.clear();
         for &s in lists[..blocks].iter().flat_map(|l| &l.0) {
             let s = s as usize;
             let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
@@ -391,9 +393,13 @@ impl CollisionStage {
         }
         self.edge_blocks = lists;
         // Particles come first: whatever the springs did, every particle
-        // the edge pass moved ends the substep outside the obstacles.
-        for i in 0..particles.len() {
-            if std::mem::take(&mut self.edge_moved[i]) && particles.inv_mass[i] != 0.0 {
+        // the edge pass moved ends the substep outside the obstacles (in
+        // any order: each moves only itself).
+        let moved = std::mem::take(&mut self.moved);
+        for &i in &moved {
+            let i = i as usize;
+            self.edge_moved[i] = false;
+            if particles.inv_mass[i] != 0.0 {
                 self.move_out(
                     &mut particles.x[i],
                     Some(&mut particles.v[i]),
@@ -402,6 +408,7 @@ impl CollisionStage {
                 );
             }
         }
+        self.moved = moved;
     }
 
     /// Moves the point `x` out to the thickness of every obstacle it is

@@ -49,7 +49,7 @@ impl CollisionStage {
         };
         let mut shortened = 0;
         for _ in 0..ROUNDS {
-            self.held.clear();
+            self.moved.clear();
             for k in 0..count {
                 let s = if watched {
                     self.edge_watch[k] as usize
@@ -85,23 +85,23 @@ impl CollisionStage {
                 for (i, wi) in [(a, wa), (b, wb)] {
                     if wi != 0.0 && !self.edge_moved[i] {
                         self.edge_moved[i] = true;
-                        self.held.push(i as u32);
+                        self.moved.push(i as u32);
                     }
                 }
                 shortened += 1;
             }
-            if self.held.is_empty() {
+            if self.moved.is_empty() {
                 break;
             }
             // The contacts still win: every particle moved ends outside.
-            let held = std::mem::take(&mut self.held);
+            let held = std::mem::take(&mut self.moved);
             for &i in &held {
                 let i = i as usize;
                 self.edge_moved[i] = false;
                 let (x, v) = (&mut particles.x[i], &mut particles.v[i]);
                 self.move_out(x, Some(v), obstacles, thickness);
             }
-            self.held = held;
+            self.moved = held;
         }
         shortened
     }
