@@ -1,15 +1,16 @@
 //! The particle pass of contact resolution: every particle near an obstacle
 //! is pushed out to the thickness and, by the solver's policy, slowed by
 //! Coulomb friction. Particles are taken in blocks of [`BLOCK`], which may
-//! run on any thread: a block writes only its own particles, and the momentum
-//! it hands to the obstacles is kept in its scratch, to be summed in
-//! particle order afterwards, so the bits never depend on the thread count.
+//! run on any thread: a block writes only its own particles, and sums the
+//! momentum it hands to each obstacle in its scratch, in particle order;
+//! the blocks' sums are added in block order afterwards. Blocks are cut by
+//! particle count alone, so the bits never depend on the thread count.
 
 use parry3d::query::Ray;
 
 use super::contact::Contact;
 use super::contact_set::{ContactRange, ParticleContact, NONE};
-use super::obstacle::Obstacle;
+use super::obstacle::{Obstacle, ObstacleImpulse};
 use super::response::FrictionPolicy;
 use super::tracks::ObstacleTracks;
 use crate::context::StepContext;
@@ -23,22 +24,16 @@ pub(super) const CONTACT_SLACK: f32 = 1.0e-5;
 /// particles still has blocks for two threads.
 pub(super) const BLOCK: usize = 1024;
 
-/// Momentum `j` (N·s) a particle handed to an obstacle at `point` (m).
-#[derive(Debug, Clone, Copy)]
-pub(super) struct HandedImpulse {
-    pub obstacle: u32,
-    pub point: Vector,
-    pub j: Vector,
-}
-
 /// Scratch of one block: the candidates of its current particle, and the
-/// momentum its particles handed to obstacles, in particle order. Alone on
-/// its cache lines: blocks on different threads write their scratch at once.
-#[derive(Debug)]
+/// momentum its particles handed to each obstacle. Alone on its cache
+/// lines: blocks on different threads write their scratch at once.
+#[derive(Debug, Default)]
 #[repr(align(128))]
 pub(super) struct BlockScratch {
     candidates: Vec<u32>,
-    pub impulses: Vec<HandedImpulse>,
+    /// Per obstacle: the momentum this block's particles handed it, summed
+    /// in particle order.
+    pub impulses: Vec<ObstacleImpulse>,
     /// Particles that came near an obstacle from outside their cached
     /// margin ([`super::tracks::ObstacleTracks::has_cached`] missed them).
     pub strays: u32,
@@ -71,17 +66,6 @@ pub(super) struct ParticlePass<'a> {
     pub far: f32,
 }
 
-impl Default for BlockScratch {
-    /// Room for a contact per particle, so that a warmed-up step seldom allocates.
-    fn default() -> Self {
-        BlockScratch {
-            candidates: Vec::new(),
-            impulses: Vec::with_capacity(BLOCK),
-            strays: 0,
-        }
-    }
-}
-
 impl ParticlePass<'_> {
     /// Resolves the particles `range` (the block's); returns the contacts resolved.
     pub fn block(
@@ -93,6 +77,10 @@ impl ParticlePass<'_> {
         let thickness = self.ctx.thickness;
         let mut contacts = 0;
         scratch.strays = 0;
+        scratch.impulses.clear();
+        scratch
+            .impulses
+            .resize(self.obstacles.len(), ObstacleImpulse::default());
         for (k, i) in range.enumerate() {
             out.nearest[k] = NONE;
             out.contacts.clear(k);
@@ -125,10 +113,13 @@ impl ParticlePass<'_> {
                 // A hair of slack keeps particles a solver left exactly at the
                 // thickness in contact, so friction still acts on them.
                 if self.inv_mass[i] != 0.0 && hit.signed_distance < thickness + CONTACT_SLACK {
-                    let (contact, handed) =
+                    let (contact, (point, j)) =
                         self.resolve(i, (&mut out.x[k], &mut out.v[k]), (o, hit));
                     out.contacts.touch(k, &contact);
-                    scratch.impulses.push(handed);
+                    let sum = &mut scratch.impulses[o];
+                    sum.linear += j;
+                    sum.angular_about_origin += point.cross(j);
+                    sum.contacts += 1;
                     contacts += 1;
                 }
             }
@@ -180,13 +171,14 @@ impl ParticlePass<'_> {
 
     /// Pushes particle `i` (at `x`, moving at `v`) out of obstacle `o` (the
     /// `hit` with it) and, by the solver's policy, applies friction. Returns
-    /// the contact and the momentum handed to the obstacle.
+    /// the contact, and the momentum (N·s) handed to the obstacle with the
+    /// point (m) it was handed at.
     fn resolve(
         &self,
         i: usize,
         (x, v): (&mut Vector, &mut Vector),
         (o, hit): (usize, Contact),
-    ) -> (ParticleContact, HandedImpulse) {
+    ) -> (ParticleContact, (Vector, Vector)) {
         let (ctx, obstacle) = (self.ctx, &self.obstacles[o]);
         let n = hit.normal;
         let new_x = *x + n * (ctx.thickness - hit.signed_distance).max(0.0);
@@ -216,11 +208,6 @@ impl ParticlePass<'_> {
             gap: 0.0,
             friction: obstacle.friction,
         };
-        let handed = HandedImpulse {
-            obstacle: o as u32,
-            point: new_x,
-            j: (v_old - v_new) * self.mass[i],
-        };
-        (contact, handed)
+        (contact, (new_x, (v_old - v_new) * self.mass[i]))
     }
 }

@@ -231,7 +231,7 @@ impl CollisionStage {
     /// friction acts on the touching particles here or was already decided
     /// inside its solve (then they are only put back on the surface).
     /// The particles are resolved block by block, on the team's threads,
-    /// and the blocks' impulses summed in particle order: the bits are
+    /// and the blocks' impulses summed in block order: the bits are
     /// those of one thread. Returns the particle contacts resolved.
     pub(crate) fn resolve(
         &mut self,
@@ -290,15 +290,16 @@ impl CollisionStage {
             };
             pass.block(range, &mut out, scratch)
         });
-        // The momentum handed to the obstacles, in particle order.
+        // The momentum handed to the obstacles, block by block in order.
         let mut strays = 0;
-        for block in &mut self.blocks[..blocks] {
+        for block in &self.blocks[..blocks] {
             strays += block.strays;
-            for handed in block.impulses.drain(..) {
-                let imp = &mut self.tracks.impulses[handed.obstacle as usize];
-                imp.linear += handed.j;
-                imp.angular_about_origin += handed.point.cross(handed.j);
-                imp.contacts += 1;
+            for (imp, sum) in self.tracks.impulses.iter_mut().zip(&block.impulses) {
+                if sum.contacts > 0 {
+                    imp.linear += sum.linear;
+                    imp.angular_about_origin += sum.angular_about_origin;
+                    imp.contacts += sum.contacts;
+                }
             }
         }
         // A stray particle may meet an obstacle along any spring.

@@ -161,8 +161,9 @@ impl ObstacleTracks {
         self.cache_start.get(i..i + 2).is_some_and(|c| c[0] != c[1])
     }
 
-    /// The contact of `point` with obstacle `o` where it is now.
-    #[inline]
+    /// The contact of `point` with obstacle `o` where it is now (inlined
+    /// for the reason `contact_prepared` is).
+    #[inline(always)]
     pub(super) fn contact(
         &self,
         obstacles: &[Obstacle],
