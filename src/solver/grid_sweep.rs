@@ -502,9 +502,7 @@ fn sweep_region(job: &RegionSweep, view: &mut View, lambda: &mut [f32]) {
 /// The material's stretch limit on a grid cloth: the stretch springs'
 /// runs, [`super::strain_limit::PASSES`] Gauss–Seidel passes at most (each
 /// family over the bands, then the boundaries), each spring longer than `factor`
-/// times its rest length shortened to it; the passes stop as the general
-/// limit's do. Returns the springs found more than
-/// [`super::strain_limit::STOP_EXCESS`] over the limit, summed over the passes.
+/// times its rest length shortened to it. Returns the springs shortened.
 pub(crate) fn limit_stretch(
     plan: &mut GridPlan,
     lanes: &mut Lanes,
@@ -542,8 +540,7 @@ pub(crate) fn limit_stretch(
     shortened
 }
 
-/// The stretch limit on one run's springs; returns how many it found more
-/// than [`super::strain_limit::STOP_EXCESS`] over the limit.
+/// The stretch limit on one run's springs; returns how many it shortened.
 fn limit_run(seg: Segment, rest: &[f32], lanes: &mut View, factor: f32) -> u32 {
     let mut over = 0;
     for t in 0..seg.len as usize {
@@ -567,7 +564,7 @@ fn limit_run(seg: Segment, rest: &[f32], lanes: &mut View, factor: f32) -> u32 {
         lanes.x[b] -= d[0] * sb;
         lanes.y[b] -= d[1] * sb;
         lanes.z[b] -= d[2] * sb;
-        over += u32::from(excess > super::strain_limit::STOP_EXCESS * rest[a]);
+        over += 1;
     }
     over
 }

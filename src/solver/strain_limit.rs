@@ -17,24 +17,13 @@ use crate::cloth::{SpringKind, Springs};
 use crate::collision::stop_separating;
 use crate::math::Vector;
 
-/// Gauss–Seidel passes at most; they stop as soon as no spring is more
-/// than [`STOP_EXCESS`] over the limit. Four were too few for a hammock of
-/// cotton under three boxes: its free edges rested 6.75% stretched under
-/// a 4.5% limit (4.9% with 16; measured).
-pub(crate) const PASSES: usize = 16;
-
-/// A spring over the limit by less than this fraction of its rest length
-/// is still shortened, but calls for no further pass: a cloth that rests
-/// at its limit (gravity stretches it again every substep) would otherwise
-/// run every pass every substep (a hanging 33×33 cloth: twice the time,
-/// measured).
-pub(crate) const STOP_EXCESS: f32 = 1.0e-3;
+/// Gauss–Seidel passes at most; they stop as soon as none is over the limit.
+pub(crate) const PASSES: usize = 4;
 
 /// Holds every stretch spring to at most `factor` times its rest length,
 /// moving the free particles' positions `x` (m); with velocities `v`
 /// (m/s), takes away the ends' relative velocity that stretches a
-/// shortened spring. Returns the springs it found more than
-/// [`STOP_EXCESS`] over the limit, summed over the passes.
+/// shortened spring. Returns the springs shortened.
 pub(crate) fn limit_stretch(
     springs: &Springs,
     inv_mass: &[f32],
@@ -47,7 +36,7 @@ pub(crate) fn limit_stretch(
     }
     let (a, b) = springs.endpoints();
     let rest = springs.rest_lengths();
-    let mut found = 0;
+    let mut shortened = 0;
     for _ in 0..PASSES {
         let mut over = 0;
         for s in springs.range(SpringKind::Stretch) {
@@ -66,14 +55,14 @@ pub(crate) fn limit_stretch(
             if let Some(v) = v.as_deref_mut() {
                 stop_separating(v, (i, j), d / len, (inv_mass[i], inv_mass[j]));
             }
-            over += u32::from(excess > STOP_EXCESS * rest[s]);
+            over += 1;
         }
-        found += over;
+        shortened += over;
         if over == 0 {
             break;
         }
     }
-    found
+    shortened
 }
 
 #[cfg(test)]
