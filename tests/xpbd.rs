@@ -228,3 +228,23 @@ fn xpbd_cloth_falls_freely_at_many_substeps() {
         );
     }
 }
+
+#[test]
+fn a_step_reports_where_its_time_went() {
+    // The drape landing on its ball: springs and contacts both take time.
+    let options = SceneOptions {
+        n: Some(24),
+        ..Default::default()
+    };
+    let mut scene = Scene::build(SceneKind::Drape, &options).unwrap();
+    let mut seen = cloth3d::solver::StageTimes::default();
+    for _ in 0..40 {
+        let t = scene.step_frame().unwrap().times;
+        // The stages lie within the step.
+        let stages = t.integrate + t.self_collision + t.constraints + t.contacts;
+        assert!(t.total > 0.0 && stages <= t.total * 1.0001, "{t:?}");
+        seen.integrate += t.integrate;
+        seen.contacts += t.contacts;
+    }
+    assert!(seen.integrate > 0.0 && seen.contacts > 0.0, "{seen:?}");
+}
