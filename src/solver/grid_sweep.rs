@@ -615,7 +615,7 @@ fn run(seg: Segment, rest: &[f32], lambda: &mut [f32], lanes: &mut View, k: Comp
     let mut done = 0;
     while done + WIDTH <= len {
         // Full steps: copies of a constant length, which are vector loads and stores.
-        chunk::<WIDTH>(a0 + done, b0 + done, rest, lambda, lanes, k);
+        chunk::<WIDTH>((a0 + done, b0 + done), None, rest, lambda, lanes, k);
         done += WIDTH;
     }
     if done == len {
@@ -629,55 +629,27 @@ fn run(seg: Segment, rest: &[f32], lambda: &mut [f32], lanes: &mut View, k: Comp
     // spring-at-a-time tail cost as much as the rest of a 16-spring run.
     let (a, b, room) = (a0 + done, b0 + done, lanes.x.len());
     if a.max(b) + WIDTH <= room && apart(a as u32, b as u32, WIDTH as u32) {
-        masked_chunk::<WIDTH>(a, b, len - done, rest, lambda, lanes, k);
+        let keep: [bool; WIDTH] = std::array::from_fn(|t| t >= len - done);
+        chunk::<WIDTH>((a, b), Some(&keep), rest, lambda, lanes, k);
         return;
     }
     while done < len {
-        chunk::<1>(a0 + done, b0 + done, rest, lambda, lanes, k);
+        chunk::<1>((a0 + done, b0 + done), None, rest, lambda, lanes, k);
         done += 1;
     }
 }
 
-/// Projects the first `valid` of the `M` springs from lanes `a..a + M` to
-/// lanes `b..b + M`; the other lanes are written back unchanged.
-#[inline(always)]
-fn masked_chunk<const M: usize>(
-    a: usize,
-    b: usize,
-    valid: usize,
-    rest: &[f32],
-    lambda: &mut [f32],
-    lanes: &mut View,
-    k: Compliance,
-) {
-    let keep: [bool; M] = std::array::from_fn(|t| t >= valid);
-    project_chunk::<M>(a, b, rest, lambda, lanes, k, Some(&keep));
-}
-
-/// Projects the `M` springs from lanes `a..a + M` to lanes `b..b + M`.
+/// Projects the `M` springs from lanes `a..a + M` to lanes `b..b + M`,
+/// leaving the lanes `keep` marks as they were (their springs are not
+/// projected; `None`: no lane kept, which the inlining folds away).
 #[inline(always)]
 fn chunk<const M: usize>(
-    a: usize,
-    b: usize,
-    rest: &[f32],
-    lambda: &mut [f32],
-    lanes: &mut View,
-    k: Compliance,
-) {
-    project_chunk::<M>(a, b, rest, lambda, lanes, k, None);
-}
-
-/// [`chunk`], leaving the lanes `keep` marks as they were (their springs
-/// are not projected).
-#[inline(always)]
-fn project_chunk<const M: usize>(
-    a: usize,
-    b: usize,
-    rest: &[f32],
-    lambda: &mut [f32],
-    lanes: &mut View,
-    k: Compliance,
+    (a, b): (usize, usize),
     keep: Option<&[bool; M]>,
+    rest: &[f32],
+    lambda: &mut [f32],
+    lanes: &mut View,
+    k: Compliance,
 ) {
     let load = |v: &[f32], at: usize| -> [f32; M] {
         let mut out = [0.0; M];
@@ -867,7 +839,7 @@ mod tests {
                 run(seg, &rest, &mut lambda, &mut view, k);
             } else {
                 for t in 0..seg.len as usize {
-                    chunk::<1>(t, 16 + t, &rest, &mut lambda, &mut view, k);
+                    chunk::<1>((t, 16 + t), None, &rest, &mut lambda, &mut view, k);
                 }
             }
             [x, y, z, lambda].map(|v| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
