@@ -135,6 +135,7 @@ impl Cloth {
                 grid: None,
                 split_from: None,
                 splits: Vec::new(),
+                pieces: Vec::new(),
             }),
             material,
             params: PhysicsParams::default(),

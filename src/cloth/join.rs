@@ -7,7 +7,7 @@ use std::sync::Arc;
 use super::cloth::{next_mass_revision, Cloth};
 use super::particles::Particles;
 use super::springs::{Spring, Springs};
-use super::topology::Topology;
+use super::topology::{GridPiece, Topology};
 use crate::error::ClothError;
 
 impl Cloth {
@@ -20,7 +20,8 @@ impl Cloth {
     /// and, with self-collision on, never pass through each other.
     ///
     /// Every piece must have the first piece's material (one cloth has one
-    /// material); a joined cloth is no grid ([`Cloth::grid`] is `None`).
+    /// material); a joined cloth is no grid ([`Cloth::grid`] is `None`),
+    /// though its pieces may be ([`Topology::grid_pieces`]).
     pub fn join(pieces: Vec<Cloth>) -> Result<Cloth, ClothError> {
         let mut pieces = pieces.into_iter();
         let Some(first) = pieces.next() else {
@@ -58,8 +59,16 @@ impl Cloth {
         }
         let mut particles = Particles::default();
         let (mut springs, mut triangles, mut uvs) = (Vec::new(), Vec::new(), Vec::new());
+        let mut grids = Vec::new();
         for piece in std::iter::once(&first).chain(&rest) {
             let offset = particles.len() as u32;
+            // Its grids, where they now lie: self-collision skips the
+            // quiet parts of grids (`collision/patches.rs`).
+            grids.extend(piece.topology.grid_pieces().map(|g| GridPiece {
+                first_particle: g.first_particle + offset as usize,
+                first_triangle: g.first_triangle + triangles.len(),
+                grid: g.grid,
+            }));
             let p = &piece.particles;
             particles.x.extend_from_slice(&p.x);
             particles.v.extend_from_slice(&p.v);
@@ -83,6 +92,7 @@ impl Cloth {
                 grid: None,
                 split_from: None,
                 splits: Vec::new(),
+                pieces: grids,
             }),
             material: first.material.clone(),
             params: first.params.clone(),

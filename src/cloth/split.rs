@@ -204,6 +204,7 @@ impl TopologyEdit {
             grid: None,
             split_from: cloth.topology.cells(),
             splits: self.splits,
+            pieces: Vec::new(),
         });
         cloth.mass_revision = next_mass_revision();
     }

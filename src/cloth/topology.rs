@@ -15,6 +15,33 @@ pub struct Grid {
     pub rows: usize,
 }
 
+/// A grid among the pieces of a joined cloth ([`crate::cloth::Cloth::join`]):
+/// its particles are `first_particle..` on from there, row by row, and its
+/// triangles `first_triangle..`, two per cell, row by row (as a grid cloth
+/// lays them out).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GridPiece {
+    /// Index of the piece's particle `(0, 0)` in the joined cloth.
+    pub first_particle: usize,
+    /// Index of the piece's first triangle in the joined cloth.
+    pub first_triangle: usize,
+    /// The piece's grid.
+    pub grid: Grid,
+}
+
+impl GridPiece {
+    /// The piece's particles in the joined cloth.
+    pub fn particles(&self) -> std::ops::Range<usize> {
+        self.first_particle..self.first_particle + self.grid.cols * self.grid.rows
+    }
+
+    /// The piece's triangles in the joined cloth.
+    pub fn triangles(&self) -> std::ops::Range<usize> {
+        let cells = self.grid.cols.saturating_sub(1) * self.grid.rows.saturating_sub(1);
+        self.first_triangle..self.first_triangle + 2 * cells
+    }
+}
+
 /// The springs, triangles, texture coordinates and grid of a cloth.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Topology {
@@ -34,6 +61,10 @@ pub struct Topology {
     /// Every split so far, in order: the particle split and the new one.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub(crate) splits: Vec<[u32; 2]>,
+    /// For cloths joined into one and not torn since: the pieces that are
+    /// grids (a joined cloth is no grid, but its pieces may be).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub(crate) pieces: Vec<GridPiece>,
 }
 
 impl Topology {
@@ -55,6 +86,23 @@ impl Topology {
     /// The grid, for cloths built by `ClothBuilder` and not torn since.
     pub fn grid(&self) -> Option<Grid> {
         self.grid
+    }
+
+    /// The parts of the cloth that are grids: the whole cloth when it is
+    /// one ([`Topology::grid`]), else the grid pieces it was joined from
+    /// (none once torn).
+    pub fn grid_pieces(&self) -> impl Iterator<Item = GridPiece> + '_ {
+        let whole = self.grid.map(|grid| GridPiece {
+            first_particle: 0,
+            first_triangle: 0,
+            grid,
+        });
+        let joined = if whole.is_none() {
+            &self.pieces[..]
+        } else {
+            &[]
+        };
+        whole.into_iter().chain(joined.iter().copied())
     }
 
     /// Every split so far, in order, as (particle split, new particle): a

@@ -8,9 +8,10 @@
 //! (points near each other in space are then near along the cloth, where
 //! the springs hold them); its triangles skip the look for pairs. A cloth
 //! lying flat or draped over a ball skips most of its triangles; folds
-//! and layers do not.
+//! and layers do not. Cloths joined into one are patched piece by piece:
+//! patches of two pieces are quiet only while out of each other's reach.
 
-use crate::cloth::Grid;
+use crate::cloth::GridPiece;
 use crate::math::Vector;
 
 /// Cells along a patch's side, at least: small enough that a wrinkled
@@ -19,24 +20,63 @@ use crate::math::Vector;
 /// patches' boxes are compared pairwise).
 const PATCH: usize = 4;
 
-/// Patches along a side of the grid, at most.
+/// Patches along a side of a grid, at most.
 const MAX_ACROSS: usize = 16;
 
 /// The largest angle (radians) between the normals of two neighbouring
 /// patches and one direction for the two to count as one sheet.
 const MAX_CONE: f32 = std::f32::consts::FRAC_PI_3;
 
-/// The patches of a grid cloth and which are quiet at the last update.
-#[derive(Debug, Default, Clone)]
-pub(crate) struct Patches {
-    /// Patches along a row and along a column.
-    across: usize,
-    down: usize,
-    /// Cells along a row and along a column of the grid.
+/// How one grid piece of the cloth is cut into patches.
+#[derive(Debug, Clone, Copy)]
+struct PieceLayout {
+    /// Where the piece's particles and triangles start in the cloth.
+    first_particle: usize,
+    first_triangle: usize,
+    /// Cells along a row and along a column of its grid.
     cells_across: usize,
     cells_down: usize,
     /// Cells along a patch's side.
     side: usize,
+    /// Patches along a row and along a column.
+    across: usize,
+    down: usize,
+    /// Index of its first patch among all the cloth's.
+    first_patch: usize,
+}
+
+impl PieceLayout {
+    fn particles(&self) -> std::ops::Range<usize> {
+        self.first_particle..self.first_particle + (self.cells_across + 1) * (self.cells_down + 1)
+    }
+
+    fn triangles(&self) -> std::ops::Range<usize> {
+        self.first_triangle..self.first_triangle + 2 * self.cells_across * self.cells_down
+    }
+
+    fn patches(&self) -> std::ops::Range<usize> {
+        self.first_patch..self.first_patch + self.across * self.down
+    }
+
+    /// The patch of the piece's triangle `t` (counted in the cloth; two
+    /// per cell, row by row).
+    fn patch_of(&self, t: usize) -> usize {
+        let cell = (t - self.first_triangle) / 2;
+        let (r, c) = (cell / self.cells_across, cell % self.cells_across);
+        self.first_patch + (r / self.side) * self.across + c / self.side
+    }
+
+    /// The patch at `(column, row)` among the piece's patches.
+    fn patch_at(&self, i: usize, j: usize) -> usize {
+        self.first_patch + j.min(self.down - 1) * self.across + i.min(self.across - 1)
+    }
+}
+
+/// The patches of a cloth's grids and which are quiet at the last update.
+#[derive(Debug, Default, Clone)]
+pub(crate) struct Patches {
+    /// The grid pieces, in triangle (and particle) order.
+    pieces: Vec<PieceLayout>,
     /// Per patch: its box (m).
     lo: Vec<Vector>,
     hi: Vec<Vector>,
@@ -50,97 +90,164 @@ pub(crate) struct Patches {
 }
 
 impl Patches {
-    /// Works out which patches of the cloth on `grid` (its triangles two
-    /// per cell, row by row, as `ClothBuilder` makes them) are quiet at
-    /// positions `x`, for pairs within `reach` metres. Off a grid, or with
-    /// triangles laid out otherwise, none is.
-    pub fn update(&mut self, x: &[Vector], grid: Option<Grid>, triangles: &[[u32; 3]], reach: f32) {
-        let Some(g) = grid.filter(|g| {
-            g.cols >= 2 && g.rows >= 2 && triangles.len() == 2 * (g.cols - 1) * (g.rows - 1)
-        }) else {
-            self.across = 0;
-            self.quiet.clear();
-            return;
-        };
-        self.cells_across = g.cols - 1;
-        self.cells_down = g.rows - 1;
-        self.side = PATCH.max(self.cells_across.max(self.cells_down).div_ceil(MAX_ACROSS));
-        self.across = self.cells_across.div_ceil(self.side);
-        self.down = self.cells_down.div_ceil(self.side);
-        let count = self.across * self.down;
+    /// Works out which patches of the cloth's grid `pieces` (each with its
+    /// triangles two per cell, row by row, as `ClothBuilder` makes them) are
+    /// quiet at positions `x`, for pairs within `reach` metres. Triangles in
+    /// no grid piece are never quiet; a piece that does not fit the cloth
+    /// (fewer particles or triangles than it claims) is left out.
+    pub fn update(
+        &mut self,
+        x: &[Vector],
+        pieces: impl Iterator<Item = GridPiece>,
+        triangles: &[[u32; 3]],
+        reach: f32,
+    ) {
+        self.pieces.clear();
+        let mut count = 0;
+        let mut next_triangle = 0;
+        for piece in pieces {
+            let g = piece.grid;
+            let fits = g.cols >= 2
+                && g.rows >= 2
+                && piece.first_triangle >= next_triangle
+                && piece.triangles().end <= triangles.len()
+                && piece.particles().end <= x.len();
+            if !fits {
+                continue;
+            }
+            next_triangle = piece.triangles().end;
+            let (cells_across, cells_down) = (g.cols - 1, g.rows - 1);
+            let side = PATCH.max(cells_across.max(cells_down).div_ceil(MAX_ACROSS));
+            let layout = PieceLayout {
+                first_particle: piece.first_particle,
+                first_triangle: piece.first_triangle,
+                cells_across,
+                cells_down,
+                side,
+                across: cells_across.div_ceil(side),
+                down: cells_down.div_ceil(side),
+                first_patch: count,
+            };
+            count = layout.patches().end;
+            self.pieces.push(layout);
+        }
         self.lo.clear();
         self.lo.resize(count, Vector::splat(f32::INFINITY));
         self.hi.clear();
         self.hi.resize(count, Vector::splat(f32::NEG_INFINITY));
         self.axis.clear();
         self.axis.resize(count, Vector::ZERO);
-        for (t, tri) in triangles.iter().enumerate() {
-            let k = self.patch_of(t);
-            let [a, b, c] = tri.map(|i| x[i as usize]);
-            self.lo[k] = self.lo[k].min(a.min(b).min(c));
-            self.hi[k] = self.hi[k].max(a.max(b).max(c));
-            self.axis[k] += (b - a).cross(c - a);
-        }
         self.spread.clear();
         self.spread.resize(count, 0.0);
-        for (t, tri) in triangles.iter().enumerate() {
-            let k = self.patch_of(t);
-            let [a, b, c] = tri.map(|i| x[i as usize]);
-            let n = (b - a).cross(c - a);
-            let cos = n.dot(self.axis[k]) / (n.length() * self.axis[k].length());
-            // NaN (a degenerate triangle or axis) counts as the widest.
-            let angle = if cos.is_finite() {
-                cos.clamp(-1.0, 1.0).acos()
-            } else {
-                std::f32::consts::PI
-            };
-            self.spread[k] = self.spread[k].max(angle);
+        for piece in &self.pieces {
+            for t in piece.triangles() {
+                let k = piece.patch_of(t);
+                let [a, b, c] = triangles[t].map(|i| x[i as usize]);
+                self.lo[k] = self.lo[k].min(a.min(b).min(c));
+                self.hi[k] = self.hi[k].max(a.max(b).max(c));
+                self.axis[k] += (b - a).cross(c - a);
+            }
+            for t in piece.triangles() {
+                let k = piece.patch_of(t);
+                let [a, b, c] = triangles[t].map(|i| x[i as usize]);
+                let n = (b - a).cross(c - a);
+                let cos = n.dot(self.axis[k]) / (n.length() * self.axis[k].length());
+                // NaN (a degenerate triangle or axis) counts as the widest.
+                let angle = if cos.is_finite() {
+                    cos.clamp(-1.0, 1.0).acos()
+                } else {
+                    std::f32::consts::PI
+                };
+                self.spread[k] = self.spread[k].max(angle);
+            }
         }
         self.quiet.clear();
         let pad = Vector::splat(reach);
-        for k in 0..count {
-            let (i, j) = (k % self.across, k / self.across);
-            let quiet = self.spread[k] < MAX_CONE
-                && (0..count).filter(|&m| m != k).all(|m| {
-                    let apart = (self.lo[k] - pad).cmpgt(self.hi[m]).any()
-                        || (self.hi[k] + pad).cmplt(self.lo[m]).any();
-                    let neighbour =
-                        (m % self.across).abs_diff(i) <= 1 && (m / self.across).abs_diff(j) <= 1;
-                    apart || (neighbour && self.one_sheet(k, m))
-                });
-            self.quiet.push(quiet);
+        for piece in &self.pieces {
+            for k in piece.patches() {
+                let local = k - piece.first_patch;
+                let (i, j) = (local % piece.across, local / piece.across);
+                // Patches of other pieces must be out of reach; of this
+                // one, out of reach or a neighbour on one sheet with it.
+                let quiet = self.spread[k] < MAX_CONE
+                    && (0..count).filter(|&m| m != k).all(|m| {
+                        let apart = (self.lo[k] - pad).cmpgt(self.hi[m]).any()
+                            || (self.hi[k] + pad).cmplt(self.lo[m]).any();
+                        if apart {
+                            return true;
+                        }
+                        if !piece.patches().contains(&m) {
+                            return false;
+                        }
+                        let other = m - piece.first_patch;
+                        let (mi, mj) = (other % piece.across, other / piece.across);
+                        match mi.abs_diff(i).max(mj.abs_diff(j)) {
+                            1 => self.one_sheet(k, m),
+                            // A grid turned about its normal has boxes
+                            // wider than its patches, which reach the
+                            // patches two away: one sheet with those
+                            // between too.
+                            2 => self.one_sheet_over(
+                                piece,
+                                (i.min(mi), j.min(mj)),
+                                (i.max(mi), j.max(mj)),
+                            ),
+                            _ => false,
+                        }
+                    });
+                self.quiet.push(quiet);
+            }
         }
     }
 
     /// True when triangle `t` needs no look.
     pub fn quiet_triangle(&self, t: usize) -> bool {
-        self.across > 0 && self.quiet[self.patch_of(t)]
+        self.pieces
+            .iter()
+            .find(|piece| piece.triangles().contains(&t))
+            .is_some_and(|piece| self.quiet[piece.patch_of(t)])
     }
 
-    /// True when particle `p` of the grid lies only in quiet patches' cells
-    /// (the cells of which it is a corner).
+    /// True when particle `p` lies in a grid piece, and there only in quiet
+    /// patches' cells (the cells of which it is a corner).
     pub fn quiet_particle(&self, p: usize) -> bool {
-        if self.across == 0 {
+        let Some(piece) = self
+            .pieces
+            .iter()
+            .find(|piece| piece.particles().contains(&p))
+        else {
             return false;
-        }
-        let cols = self.cells_across + 1;
-        let (r, c) = (p / cols, p % cols);
-        let rows = [r.saturating_sub(1), r.min(self.cells_down - 1)];
-        let columns = [c.saturating_sub(1), c.min(self.cells_across - 1)];
+        };
+        let cols = piece.cells_across + 1;
+        let local = p - piece.first_particle;
+        let (r, c) = (local / cols, local % cols);
+        let rows = [r.saturating_sub(1), r.min(piece.cells_down - 1)];
+        let columns = [c.saturating_sub(1), c.min(piece.cells_across - 1)];
         rows.iter().all(|&cr| {
-            columns.iter().all(|&cc| {
-                let k = (cr / self.side).min(self.down - 1) * self.across
-                    + (cc / self.side).min(self.across - 1);
-                self.quiet[k]
-            })
+            columns
+                .iter()
+                .all(|&cc| self.quiet[piece.patch_at(cc / piece.side, cr / piece.side)])
         })
     }
 
-    /// The patch of triangle `t` (two per cell, row by row).
-    fn patch_of(&self, t: usize) -> usize {
-        let cell = t / 2;
-        let (r, c) = (cell / self.cells_across, cell % self.cells_across);
-        (r / self.side) * self.across + c / self.side
+    /// True when the patches of `piece` from column and row `from` to `to`
+    /// (inclusive) together keep their normals within [`MAX_CONE`] of one
+    /// direction: their summed axis, and each patch's cone about it.
+    fn one_sheet_over(
+        &self,
+        piece: &PieceLayout,
+        from: (usize, usize),
+        to: (usize, usize),
+    ) -> bool {
+        let block = || {
+            (from.1..=to.1).flat_map(move |j| (from.0..=to.0).map(move |i| piece.patch_at(i, j)))
+        };
+        let axis = block().fold(Vector::ZERO, |sum, k| sum + self.axis[k]);
+        block().all(|k| {
+            let a = self.axis[k];
+            let cos = a.dot(axis) / (a.length() * axis.length());
+            cos.is_finite() && cos.clamp(-1.0, 1.0).acos() + self.spread[k] < MAX_CONE
+        })
     }
 
     /// True when patches `k` and `m` together keep their normals within
@@ -162,7 +269,8 @@ impl Patches {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cloth::ClothBuilder;
+    use crate::cloth::{Cloth, ClothBuilder};
+    use crate::math::{Pose, Rotation};
 
     /// A flat cloth needs no look anywhere; folded in two, the patches
     /// facing each other across the fold do, and the flat ones beyond the
@@ -170,9 +278,11 @@ mod tests {
     #[test]
     fn flat_is_quiet_and_facing_layers_are_not() {
         let mut cloth = ClothBuilder::new(33, 17).size(1.0, 0.5).build().unwrap();
-        let (grid, triangles) = (cloth.grid(), cloth.triangles().to_vec());
+        let triangles = cloth.triangles().to_vec();
+        let topology = cloth.topology().clone();
+        let grid = || topology.grid_pieces();
         let mut patches = Patches::default();
-        patches.update(cloth.positions(), grid, &triangles, 0.02);
+        patches.update(cloth.positions(), grid(), &triangles, 0.02);
         assert!((0..triangles.len()).all(|t| patches.quiet_triangle(t)));
         assert!(patches.quiet_particle(0) && patches.quiet_particle(33 * 17 - 1));
         // Lay columns 24.. back over columns 16..24, 1.5 cm above: a flap.
@@ -185,7 +295,7 @@ mod tests {
                     .unwrap();
             }
         }
-        patches.update(cloth.positions(), grid, &triangles, 0.02);
+        patches.update(cloth.positions(), grid(), &triangles, 0.02);
         // Cell (8, 28) lies in the flap, cell (8, 18) under it, cell (8, 4)
         // far from both.
         let t = |r: usize, c: usize| 2 * (r * 32 + c);
@@ -193,7 +303,67 @@ mod tests {
         assert!(!patches.quiet_triangle(t(8, 18)));
         assert!(patches.quiet_triangle(t(8, 4)));
         // Off a grid, nothing is quiet.
-        patches.update(cloth.positions(), None, &triangles, 0.02);
+        patches.update(cloth.positions(), std::iter::empty(), &triangles, 0.02);
         assert!(!patches.quiet_triangle(0));
+    }
+
+    /// Cloths joined into one are patched piece by piece: two flat pieces
+    /// far apart need no look; one lowered to 1.5 cm above the other, the
+    /// patches facing each other do (a patch of one piece is never the
+    /// other's neighbour), and a third piece far off still needs none.
+    #[test]
+    fn joined_pieces_are_quiet_apart_and_not_stacked() {
+        // Turned about its normal (the third piece), a grid's patch boxes
+        // reach the patches two away: those are one sheet with it too.
+        let piece = |y: f32, x: f32, turn: f32| {
+            let at = Vector::new(x, y, 0.0);
+            ClothBuilder::new(17, 9)
+                .size(0.5, 0.25)
+                .pose(Pose::from_parts(at, Rotation::from_rotation_y(turn)))
+                .build()
+                .unwrap()
+        };
+        let mut cloth = Cloth::join(vec![
+            piece(0.0, 0.0, 0.0),
+            piece(1.0, 0.0, 0.0),
+            piece(0.0, 5.0, 0.8),
+        ])
+        .unwrap();
+        assert!(cloth.grid().is_none());
+        let topology = cloth.topology().clone();
+        assert_eq!(topology.grid_pieces().count(), 3);
+        let triangles = cloth.triangles().to_vec();
+        let (per_piece, per_piece_triangles) = (17 * 9, 2 * 16 * 8);
+        let mut patches = Patches::default();
+        patches.update(cloth.positions(), topology.grid_pieces(), &triangles, 0.02);
+        assert!((0..triangles.len()).all(|t| patches.quiet_triangle(t)));
+        assert!((0..3 * per_piece).all(|p| patches.quiet_particle(p)));
+        // The second piece down to 1.5 cm above the first.
+        for i in per_piece..2 * per_piece {
+            let below = cloth.positions()[i - per_piece];
+            cloth
+                .set_position(i, below + Vector::new(0.0, 0.015, 0.0))
+                .unwrap();
+        }
+        patches.update(cloth.positions(), topology.grid_pieces(), &triangles, 0.02);
+        for t in 0..2 * per_piece_triangles {
+            assert!(
+                !patches.quiet_triangle(t),
+                "triangle {t} of a stacked piece"
+            );
+        }
+        assert!(!patches.quiet_particle(0) && !patches.quiet_particle(per_piece));
+        let third = 2 * per_piece_triangles..3 * per_piece_triangles;
+        assert!(third.clone().all(|t| patches.quiet_triangle(t)));
+        assert!(patches.quiet_particle(2 * per_piece + 5));
+        // Past the last piece's triangles (none here) or with pieces that
+        // claim more than the cloth has: nothing quiet, nothing out of bounds.
+        patches.update(
+            &cloth.positions()[..10],
+            topology.grid_pieces(),
+            &triangles,
+            0.02,
+        );
+        assert!(!patches.quiet_triangle(0) && !patches.quiet_particle(0));
     }
 }

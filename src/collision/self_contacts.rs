@@ -300,7 +300,8 @@ impl SelfContacts {
         let longest = self.neighbours.longest();
         self.hash
             .build(x, 2.0 * longest.max(look.reach).max(1.0e-4));
-        self.patches.update(x, topology.grid, triangles, look.reach);
+        self.patches
+            .update(x, topology.grid_pieces(), triangles, look.reach);
         let blocks = triangles.len().div_ceil(TRIANGLE_BLOCK);
         if self.blocks.len() < blocks {
             self.blocks.resize_with(blocks, PairList::default);
