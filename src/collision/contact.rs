@@ -36,7 +36,7 @@ pub fn contact(shape: &dyn Shape, pose: &Pose, point: Vector) -> Option<Contact>
     let analytic = Analytic::of(shape);
     match analytic {
         Analytic::Other => general_contact(shape, pose, point),
-        _ => contact_prepared(shape, analytic, &PoseF64::of(pose), point),
+        _ => contact_prepared(shape, analytic, &PoseF64::placing(pose, analytic), point),
     }
 }
 
@@ -48,6 +48,8 @@ pub(crate) enum Analytic {
     Ball(f32),
     /// A cuboid of these half extents (m).
     Cuboid(Vector),
+    /// A capsule: its segment's ends (m, in its own frame) and radius (m).
+    Capsule(Vector, Vector, f32),
     /// Any other shape: parry's point projection.
     Other,
 }
@@ -59,6 +61,8 @@ impl Analytic {
             Analytic::Ball(ball.radius)
         } else if let Some(cuboid) = shape.as_cuboid() {
             Analytic::Cuboid(cuboid.half_extents)
+        } else if let Some(capsule) = shape.as_capsule() {
+            Analytic::Capsule(capsule.segment.a, capsule.segment.b, capsule.radius)
         } else {
             Analytic::Other
         }
@@ -78,6 +82,9 @@ pub(crate) struct PoseF64 {
     /// along the axes, whose queries then skip the two rotations (a third
     /// of a frame of the `box` scene, measured).
     turned: bool,
+    /// A capsule's segment placed in the world (m): its queries then need
+    /// no rotation (zero for other shapes).
+    segment: [DVec3; 2],
 }
 
 impl PoseF64 {
@@ -90,7 +97,27 @@ impl PoseF64 {
             q_inv: q.inverse(),
             t: pose.translation.as_dvec3(),
             turned: q != DQuat::IDENTITY,
+            segment: [DVec3::ZERO; 2],
         }
+    }
+
+    /// `pose` in double precision, with what the `analytic` shape's
+    /// queries need of it placed once.
+    pub fn placing(pose: &Pose, analytic: Analytic) -> Self {
+        let mut placed = PoseF64::of(pose);
+        if let Analytic::Capsule(a, b, _) = analytic {
+            let place = |p: Vector| {
+                let p = p.as_dvec3();
+                let turned = if placed.turned {
+                    placed.q.mul_vec3(p)
+                } else {
+                    p
+                };
+                turned + placed.t
+            };
+            placed.segment = [place(a), place(b)];
+        }
+        placed
     }
 }
 
@@ -109,6 +136,8 @@ pub(crate) fn contact_prepared(
     match analytic {
         Analytic::Ball(radius) => ball_contact(radius, pose, point),
         Analytic::Cuboid(half) => cuboid_contact(half, pose, point),
+        Analytic::Capsule(_, _, radius) => capsule_contact(radius, pose, point)
+            .or_else(|| general_contact(shape, &pose.pose, point)),
         Analytic::Other => general_contact(shape, &pose.pose, point),
     }
 }
@@ -231,6 +260,37 @@ fn cuboid_contact(half: Vector, pose: &PoseF64, point: Vector) -> Option<Contact
     to_world(pose, surface, normal, -gaps[axis])
 }
 
+/// A capsule, analytically: the nearest point of its segment (placed in
+/// the world by [`PoseF64::placing`]: a capsule looks the same however it
+/// turns about its segment, so no rotation) pushed out by the radius, in
+/// double precision. `None` for a point on the segment itself, whose
+/// normal is any direction across it (parry's projection then picks one).
+#[inline]
+fn capsule_contact(radius: f32, pose: &PoseF64, point: Vector) -> Option<Contact> {
+    let p = point.as_dvec3();
+    let [a, b] = pose.segment;
+    let axis = b - a;
+    let length2 = axis.length_squared();
+    let t = if length2 > 0.0 {
+        ((p - a).dot(axis) / length2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let nearest = a + axis * t;
+    let offset = p - nearest;
+    let dist = offset.length();
+    if dist <= f64::from(ON_SURFACE) {
+        return None;
+    }
+    let normal = offset / dist;
+    let radius = f64::from(radius);
+    finite(Contact {
+        point: (nearest + normal * radius).as_vec3(),
+        normal: normal.as_vec3(),
+        signed_distance: (dist - radius) as f32,
+    })
+}
+
 /// Outward normal at a local point lying on the surface.
 fn surface_normal(shape: &dyn Shape, local: Vector) -> Option<Vector> {
     use parry3d::shape::ShapeType;
@@ -275,7 +335,7 @@ pub fn penetration_depth(shape: &dyn Shape, pose: &Pose, point: Vector) -> f32 {
 mod tests {
     use super::*;
     use crate::math::Rotation;
-    use parry3d::shape::Cuboid;
+    use parry3d::shape::{Capsule, Cuboid};
 
     #[test]
     fn cuboid_contacts_match_parry_laid_along_the_axes_or_turned() {
@@ -308,5 +368,49 @@ mod tests {
             }
         }
         assert_eq!(checked, 2 * 343);
+    }
+
+    #[test]
+    fn capsule_contacts_match_parry_inside_outside_and_at_the_caps() {
+        let capsule = Capsule::new(
+            Vector::new(-0.1, -0.4, 0.0),
+            Vector::new(0.1, 0.5, 0.05),
+            0.2,
+        );
+        let pose = Pose::from_parts(Vector::new(0.3, 1.0, -0.2), Rotation::from_rotation_x(1.2));
+        let shape: &dyn Shape = &capsule;
+        assert!(matches!(Analytic::of(shape), Analytic::Capsule(..)));
+        let prepared = PoseF64::placing(&pose, Analytic::of(shape));
+        let (mut inside, mut outside) = (0, 0);
+        for i in 0..7 {
+            for j in 0..9 {
+                for k in 0..7 {
+                    let local = Vector::new(i as f32 - 3.0, j as f32 - 4.0, k as f32 - 3.0) * 0.13;
+                    let p = pose.transform_point(local);
+                    let ours = contact(shape, &pose, p).unwrap();
+                    let parry = general_contact(shape, &pose, p).unwrap();
+                    let d = (ours.signed_distance - parry.signed_distance).abs();
+                    assert!(d < 1e-5, "{p}: {ours:?} against {parry:?}");
+                    assert!((ours.point - parry.point).length() < 1e-5, "{p}");
+                    if parry.signed_distance.abs() > 1e-3 {
+                        assert!(ours.normal.dot(parry.normal) > 0.9999, "{p}");
+                    }
+                    if parry.signed_distance < 0.0 {
+                        inside += 1;
+                    } else {
+                        outside += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            inside > 10 && outside > 100,
+            "{inside} inside, {outside} outside"
+        );
+        // On the segment itself: parry's answer.
+        let on_axis = pose.transform_point(Vector::new(0.0, 0.05, 0.025));
+        assert!(capsule_contact(0.2, &prepared, on_axis).is_none());
+        let hit = contact(shape, &pose, on_axis).unwrap();
+        assert!((hit.signed_distance + 0.2).abs() < 1e-5, "{hit:?}");
     }
 }

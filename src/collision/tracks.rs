@@ -262,7 +262,12 @@ impl ObstacleTracks {
                 .map(|(&(center, _), pose)| pose.transform_point(center)),
         );
         self.poses_f64.clear();
-        self.poses_f64.extend(self.poses.iter().map(PoseF64::of));
+        self.poses_f64.extend(
+            self.poses
+                .iter()
+                .zip(&self.analytic)
+                .map(|(pose, &analytic)| PoseF64::placing(pose, analytic)),
+        );
     }
 
     /// Velocity of the material point of obstacle `o` at `point`, now.
