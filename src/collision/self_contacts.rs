@@ -173,19 +173,39 @@ impl Look<'_> {
         let sheet = neighbours.sheet([ia, ib, ib], self.reach + 2.0 * length);
         let borders = neighbours.border_edges();
         let first = out.len();
+        let length2 = u.length_squared();
         hash.for_each_in(lo, hi, |p| {
             if sheet.holds(p) {
                 return;
             }
+            // How far p lies beyond reach of the border edge: an edge from p
+            // with a point within reach of it is at least that long (a hair
+            // more spares the rounding: the pairs are those of the look
+            // without this test).
+            let xp = x[p as usize];
+            let along = if length2 > 0.0 {
+                ((xp - a).dot(u) / length2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let beyond = (xp - a - u * along).length() - self.reach;
+            let shortest2 = if beyond > 0.0 {
+                beyond * beyond * (1.0 - 1.0e-3)
+            } else {
+                0.0
+            };
             for &q in neighbours.edges_from(p) {
                 if q == ia || q == ib || p == ia || p == ib || sheet.holds(q) {
+                    continue;
+                }
+                let v = x[q as usize] - xp;
+                if v.length_squared() < shortest2 {
                     continue;
                 }
                 // Two border edges meet from both sides: keep the lower one's.
                 if [p, q] < [ia, ib] && borders.binary_search(&[p, q]).is_ok() {
                     continue;
                 }
-                let (xp, v) = (x[p as usize], x[q as usize] - x[p as usize]);
                 let Some((s, t, n)) = closest(a, u, xp, v) else {
                     continue;
                 };
