@@ -54,34 +54,64 @@ pub fn wind_force_on_triangle(p0: Vector, p1: Vector, p2: Vector, wind: &Wind) -
 /// The air's velocity (m/s) at `at` (m) and time `t` (s) of a wind with a
 /// speed: its direction at its speed, varied by its gusts.
 pub fn air_velocity(wind: &Wind, at: Vector, t: f32) -> Vector {
-    let Some(dir) = wind.direction.try_normalize() else {
-        return Vector::ZERO;
-    };
-    if wind.turbulence == 0.0 {
-        return dir * wind.speed;
+    AirField::of(wind).map_or(Vector::ZERO, |air| air.at(at, t))
+}
+
+/// Gust waves of [`air_velocity`]: frequency (Hz) and amplitude (a share
+/// of the turbulence) of each, downwind and across.
+const GUSTS: [(f32, f32); 3] = [(0.4, 0.5), (1.1, 0.3), (2.9, 0.2)];
+
+/// What [`air_velocity`] works out of a wind once, whatever the point and
+/// time: its direction, the direction across it and the gusts' phases
+/// (the wind-force loop asks for the air at every triangle each substep).
+#[derive(Debug, Clone, Copy)]
+struct AirField {
+    wind: Wind,
+    dir: Vector,
+    side: Vector,
+    /// Phases (rad) of the gusts downwind, then across.
+    phases: [f32; 6],
+}
+
+impl AirField {
+    /// The field of `wind`; `None` when it has no direction.
+    fn of(wind: &Wind) -> Option<AirField> {
+        let dir = wind.direction.try_normalize()?;
+        let phase = |k: u32| {
+            let h = (wind.seed ^ k.wrapping_mul(0x9e37_79b9)).wrapping_mul(0x85eb_ca6b);
+            (h >> 8) as f32 / (1u32 << 24) as f32 * std::f32::consts::TAU
+        };
+        Some(AirField {
+            wind: *wind,
+            dir,
+            side: dir.cross(Vector::Y).try_normalize().unwrap_or(Vector::X),
+            phases: std::array::from_fn(|k| phase(k as u32)),
+        })
     }
-    // Three gust waves travelling downwind at the air's speed, and three
-    // across it; phases from the seed.
-    let downwind = at.dot(dir);
-    let side = dir.cross(Vector::Y).try_normalize().unwrap_or(Vector::X);
-    let across = at.dot(side);
-    let phase = |k: u32| {
-        let h = (wind.seed ^ k.wrapping_mul(0x9e37_79b9)).wrapping_mul(0x85eb_ca6b);
-        (h >> 8) as f32 / (1u32 << 24) as f32 * std::f32::consts::TAU
-    };
-    let tau = std::f32::consts::TAU;
-    let mut along = 0.0;
-    let mut sideways = 0.0;
-    for (k, (freq, amp)) in [(0.4f32, 0.5f32), (1.1, 0.3), (2.9, 0.2)]
-        .iter()
-        .enumerate()
-    {
+
+    /// The air's velocity (m/s) at `at` (m) and time `t` (s).
+    #[inline]
+    fn at(&self, at: Vector, t: f32) -> Vector {
+        let (wind, dir) = (&self.wind, self.dir);
+        if wind.turbulence == 0.0 {
+            return dir * wind.speed;
+        }
+        // Three gust waves travelling downwind at the air's speed, and three
+        // across it; phases from the seed.
+        let downwind = at.dot(dir);
+        let side = self.side;
+        let across = at.dot(side);
+        let tau = std::f32::consts::TAU;
+        let mut along = 0.0;
+        let mut sideways = 0.0;
         let travel = t - downwind / wind.speed.max(0.1);
-        along += amp * (tau * freq * travel + phase(k as u32)).sin();
-        sideways += amp * (tau * freq * 1.3 * travel + 2.0 * across + phase(k as u32 + 3)).sin();
+        for (k, (freq, amp)) in GUSTS.iter().enumerate() {
+            along += amp * (tau * freq * travel + self.phases[k]).sin();
+            sideways += amp * (tau * freq * 1.3 * travel + 2.0 * across + self.phases[k + 3]).sin();
+        }
+        dir * (wind.speed * (1.0 + wind.turbulence * along))
+            + side * (0.5 * wind.speed * wind.turbulence * sideways)
     }
-    dir * (wind.speed * (1.0 + wind.turbulence * along))
-        + side * (0.5 * wind.speed * wind.turbulence * sideways)
 }
 
 /// Total wind force (N) on a triangle moving at `velocity` (m/s) at time
@@ -97,13 +127,27 @@ pub fn wind_force_on_moving_triangle(
     if wind.speed <= 0.0 {
         return wind_force_on_triangle(p0, p1, p2, wind);
     }
+    let air = AirField::of(wind);
+    wind_force_in_field([p0, p1, p2], velocity, (wind, air.as_ref()), t)
+}
+
+/// [`wind_force_on_moving_triangle`] for a wind with a speed, its field
+/// (`None`: no direction, still air) worked out already.
+#[inline]
+fn wind_force_in_field(
+    [p0, p1, p2]: [Vector; 3],
+    velocity: Vector,
+    (wind, air): (&Wind, Option<&AirField>),
+    t: f32,
+) -> Vector {
     let cross = (p1 - p0).cross(p2 - p0);
     let twice_area = cross.length();
     if twice_area <= f32::MIN_POSITIVE {
         return Vector::ZERO;
     }
     let n = cross / twice_area;
-    let u = air_velocity(wind, (p0 + p1 + p2) / 3.0, t) - velocity;
+    let centroid = (p0 + p1 + p2) / 3.0;
+    let u = air.map_or(Vector::ZERO, |air| air.at(centroid, t)) - velocity;
     let speed2 = u.length_squared();
     if speed2 <= f32::MIN_POSITIVE {
         return Vector::ZERO;
@@ -222,10 +266,17 @@ pub(crate) fn add_wind_forces(
     if wind.is_calm() {
         return;
     }
+    let air = AirField::of(wind);
     for tri in triangles {
         let [i, j, k] = tri.map(|i| i as usize);
         let velocity = (v[i] + v[j] + v[k]) / 3.0;
-        let share = wind_force_on_moving_triangle([x[i], x[j], x[k]], velocity, wind, t) / 3.0;
+        let corners = [x[i], x[j], x[k]];
+        let force = if wind.speed <= 0.0 {
+            wind_force_on_triangle(corners[0], corners[1], corners[2], wind)
+        } else {
+            wind_force_in_field(corners, velocity, (wind, air.as_ref()), t)
+        };
+        let share = force / 3.0;
         f[i] += share;
         f[j] += share;
         f[k] += share;

@@ -24,10 +24,10 @@ const ON_SURFACE: f32 = 1.0e-6;
 /// The contact of `point` with `shape` at `pose`; `None` only if the shape
 /// cannot answer (non-finite data).
 ///
-/// Balls and cuboids are answered analytically in double precision (the
-/// same surface point as parry's projection, with a normal that stays exact a
-/// hair away from the surface); every other shape goes through parry's
-/// `project_local_point`.
+/// Balls, cuboids and capsules are answered analytically (the same surface
+/// point as parry's projection, with a normal that stays exact a hair away
+/// from the surface; cuboids and capsules in double precision); every
+/// other shape goes through parry's `project_local_point`.
 ///
 /// Degenerate cases get a sensible normal, never NaN: a point at a ball's
 /// centre is pushed out along `+y`; a point exactly on an edge or corner gets
