@@ -16,9 +16,9 @@ pub struct Grid {
 }
 
 /// A grid among the pieces of a joined cloth ([`crate::cloth::Cloth::join`]):
-/// its particles are `first_particle..` on from there, row by row, and its
-/// triangles `first_triangle..`, two per cell, row by row (as a grid cloth
-/// lays them out).
+/// its particles follow one another from `first_particle` on, row by row,
+/// and its triangles from `first_triangle` on, two per cell, row by row (as
+/// a grid cloth lays them out).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct GridPiece {
     /// Index of the piece's particle `(0, 0)` in the joined cloth.
@@ -32,13 +32,16 @@ pub struct GridPiece {
 impl GridPiece {
     /// The piece's particles in the joined cloth.
     pub fn particles(&self) -> std::ops::Range<usize> {
-        self.first_particle..self.first_particle + self.grid.cols * self.grid.rows
+        // Saturating: a piece read from a file may claim any size.
+        let count = self.grid.cols.saturating_mul(self.grid.rows);
+        self.first_particle..self.first_particle.saturating_add(count)
     }
 
     /// The piece's triangles in the joined cloth.
     pub fn triangles(&self) -> std::ops::Range<usize> {
-        let cells = self.grid.cols.saturating_sub(1) * self.grid.rows.saturating_sub(1);
-        self.first_triangle..self.first_triangle + 2 * cells
+        let cells =
+            (self.grid.cols.saturating_sub(1)).saturating_mul(self.grid.rows.saturating_sub(1));
+        self.first_triangle..self.first_triangle.saturating_add(cells.saturating_mul(2))
     }
 }
 

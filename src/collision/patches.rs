@@ -269,7 +269,7 @@ impl Patches {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cloth::{Cloth, ClothBuilder};
+    use crate::cloth::{Cloth, ClothBuilder, Grid};
     use crate::math::{Pose, Rotation};
 
     /// A flat cloth needs no look anywhere; folded in two, the patches
@@ -365,5 +365,15 @@ mod tests {
             0.02,
         );
         assert!(!patches.quiet_triangle(0) && !patches.quiet_particle(0));
+        let huge = GridPiece {
+            first_particle: 5,
+            first_triangle: 0,
+            grid: Grid {
+                cols: usize::MAX,
+                rows: 3,
+            },
+        };
+        patches.update(cloth.positions(), std::iter::once(huge), &triangles, 0.02);
+        assert!(!patches.quiet_triangle(0) && !patches.quiet_particle(7));
     }
 }
