@@ -1,6 +1,7 @@
 //! Several cloths in one scene: joined into one simulated cloth, they meet
 //! through self-collision and never pass through each other.
 
+use cloth3d::cloth::{Grid, GridPiece};
 use cloth3d::collision::self_intersections;
 use cloth3d::metrics::pieces;
 use cloth3d::prelude::*;
@@ -125,6 +126,31 @@ fn join_keeps_each_piece_and_numbers_them_in_order() {
         .all(|s| ((s.a as usize) < na) == ((s.b as usize) < na)));
     assert_eq!(pieces(&joined), 2);
     assert!(joined.grid().is_none());
+    // Each piece's grid, where it now lies (self-collision patches them);
+    // joined again, offset again; through a snapshot, kept.
+    let grids = |c: &Cloth| c.topology().grid_pieces().collect::<Vec<_>>();
+    let piece = |first_particle, first_triangle, cols, rows| GridPiece {
+        first_particle,
+        first_triangle,
+        grid: Grid { cols, rows },
+    };
+    let ta = a.triangles().len();
+    assert_eq!(
+        grids(&joined),
+        [piece(0, 0, SIDE, SIDE), piece(na, ta, 5, 4)]
+    );
+    let again = Cloth::join(vec![b.clone(), joined.clone()]).unwrap();
+    let tb = b.triangles().len();
+    assert_eq!(
+        grids(&again),
+        [
+            piece(0, 0, 5, 4),
+            piece(nb, tb, SIDE, SIDE),
+            piece(nb + na, tb + ta, 5, 4)
+        ]
+    );
+    let back: Cloth = serde_json::from_str(&serde_json::to_string(&joined).unwrap()).unwrap();
+    assert_eq!(grids(&back), grids(&joined));
     // One piece is itself.
     assert_eq!(Cloth::join(vec![b.clone()]).unwrap(), b);
     assert!(Cloth::join(vec![]).is_err());
