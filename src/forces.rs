@@ -124,15 +124,12 @@ pub fn wind_force_on_moving_triangle(
     wind: &Wind,
     t: f32,
 ) -> Vector {
-    if wind.speed <= 0.0 {
-        return wind_force_on_triangle(p0, p1, p2, wind);
-    }
     let air = AirField::of(wind);
     wind_force_in_field([p0, p1, p2], velocity, (wind, air.as_ref()), t)
 }
 
-/// [`wind_force_on_moving_triangle`] for a wind with a speed, its field
-/// (`None`: no direction, still air) worked out already.
+/// [`wind_force_on_moving_triangle`] with the wind's field (`None`: no
+/// direction, still air) worked out already.
 #[inline]
 fn wind_force_in_field(
     [p0, p1, p2]: [Vector; 3],
@@ -140,6 +137,9 @@ fn wind_force_in_field(
     (wind, air): (&Wind, Option<&AirField>),
     t: f32,
 ) -> Vector {
+    if wind.speed <= 0.0 {
+        return wind_force_on_triangle(p0, p1, p2, wind);
+    }
     let cross = (p1 - p0).cross(p2 - p0);
     let twice_area = cross.length();
     if twice_area <= f32::MIN_POSITIVE {
@@ -270,12 +270,7 @@ pub(crate) fn add_wind_forces(
     for tri in triangles {
         let [i, j, k] = tri.map(|i| i as usize);
         let velocity = (v[i] + v[j] + v[k]) / 3.0;
-        let corners = [x[i], x[j], x[k]];
-        let force = if wind.speed <= 0.0 {
-            wind_force_on_triangle(corners[0], corners[1], corners[2], wind)
-        } else {
-            wind_force_in_field(corners, velocity, (wind, air.as_ref()), t)
-        };
+        let force = wind_force_in_field([x[i], x[j], x[k]], velocity, (wind, air.as_ref()), t);
         let share = force / 3.0;
         f[i] += share;
         f[j] += share;
