@@ -109,18 +109,20 @@ impl PoseF64 {
     pub fn placing(pose: &Pose, analytic: Analytic) -> Self {
         let mut placed = PoseF64::of(pose);
         if let Analytic::Capsule(a, b, _) = analytic {
-            let place = |p: Vector| {
-                let p = p.as_dvec3();
-                let turned = if placed.turned {
-                    placed.rotation * p
-                } else {
-                    p
-                };
-                turned + placed.t
-            };
-            placed.segment = [place(a), place(b)];
+            placed.segment = [a, b].map(|p| placed.turn(p.as_dvec3()) + placed.t);
         }
         placed
+    }
+
+    /// A vector of the shape's frame turned into the world's (the same
+    /// vector when the pose is not turned).
+    #[inline]
+    fn turn(&self, v: DVec3) -> DVec3 {
+        if self.turned {
+            self.rotation * v
+        } else {
+            v
+        }
     }
 }
 
@@ -194,14 +196,9 @@ fn local_f64(pose: &PoseF64, point: Vector) -> DVec3 {
 /// Back to world coordinates, in single precision.
 #[inline]
 fn to_world(pose: &PoseF64, point: DVec3, normal: DVec3, signed: f64) -> Option<Contact> {
-    let (point, normal) = if pose.turned {
-        (pose.rotation * point, pose.rotation * normal)
-    } else {
-        (point, normal)
-    };
     finite(Contact {
-        point: (point + pose.t).as_vec3(),
-        normal: normal.as_vec3(),
+        point: (pose.turn(point) + pose.t).as_vec3(),
+        normal: pose.turn(normal).as_vec3(),
         signed_distance: signed as f32,
     })
 }
