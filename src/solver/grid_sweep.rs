@@ -509,6 +509,17 @@ pub(crate) fn limit_stretch(
     factor: f32,
     team: Team,
 ) -> u32 {
+    limit_stretch_with(plan, lanes, factor, team, simd_available())
+}
+
+/// [`limit_stretch`], with the AVX2 kernel only when `simd`.
+fn limit_stretch_with(
+    plan: &mut GridPlan,
+    lanes: &mut Lanes,
+    factor: f32,
+    team: Team,
+    simd: bool,
+) -> u32 {
     if !factor.is_finite() {
         return 0;
     }
@@ -524,11 +535,14 @@ pub(crate) fn limit_stretch(
                     // SAFETY: as in `sweep_with`: disjoint regions, borrowed buffers.
                     let mut view = unsafe { shared.view(region.lanes.clone()) };
                     let rest = &rest[p][region.lanes.clone()];
-                    let mut over = 0;
-                    for seg in &region.runs[p] {
-                        over += limit_run(*seg, rest, &mut view, factor);
+                    let runs = &region.runs[p];
+                    #[cfg(target_arch = "x86_64")]
+                    if simd {
+                        // SAFETY: `simd` only when the CPU has AVX2.
+                        return unsafe { limit_runs_avx2(runs, rest, &mut view, factor) };
                     }
-                    over
+                    let _ = simd;
+                    limit_runs(runs, rest, &mut view, factor)
                 });
             }
         }
@@ -540,32 +554,78 @@ pub(crate) fn limit_stretch(
     shortened
 }
 
-/// The stretch limit on one run's springs; returns how many it shortened.
-fn limit_run(seg: Segment, rest: &[f32], lanes: &mut View, factor: f32) -> u32 {
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn limit_runs_avx2(runs: &[Segment], rest: &[f32], lanes: &mut View, factor: f32) -> u32 {
+    limit_runs(runs, rest, lanes, factor)
+}
+
+/// The stretch limit on some runs' springs; returns how many it shortened.
+#[inline(always)]
+fn limit_runs(runs: &[Segment], rest: &[f32], lanes: &mut View, factor: f32) -> u32 {
     let mut over = 0;
-    for t in 0..seg.len as usize {
-        let (a, b) = (seg.a as usize + t, seg.b as usize + t);
-        let d = [
-            lanes.x[b] - lanes.x[a],
-            lanes.y[b] - lanes.y[a],
-            lanes.z[b] - lanes.z[a],
-        ];
-        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        let excess = len - rest[a] * factor;
-        let w = lanes.w[a] + lanes.w[b];
-        if excess.is_nan() || excess <= 0.0 || w == 0.0 {
-            continue;
+    for seg in runs {
+        let (a, b, len) = (seg.a as usize, seg.b as usize, seg.len as usize);
+        let mut done = 0;
+        // A run's springs share no particle: `WIDTH` of them at once give
+        // the bits of one at a time.
+        while done + WIDTH <= len {
+            over += limit_chunk::<WIDTH>((a + done, b + done), rest, lanes, factor);
+            done += WIDTH;
         }
-        let s = excess / (w * len);
-        let (sa, sb) = (lanes.w[a] * s, lanes.w[b] * s);
-        lanes.x[a] += d[0] * sa;
-        lanes.y[a] += d[1] * sa;
-        lanes.z[a] += d[2] * sa;
-        lanes.x[b] -= d[0] * sb;
-        lanes.y[b] -= d[1] * sb;
-        lanes.z[b] -= d[2] * sb;
-        over += 1;
+        while done < len {
+            over += limit_chunk::<1>((a + done, b + done), rest, lanes, factor);
+            done += 1;
+        }
     }
+    over
+}
+
+/// The stretch limit on the `M` springs from lanes `a..a + M` to lanes
+/// `b..b + M`: each longer than `factor` times its rest length (and with
+/// a free end) shortened to it, its ends moved by their inverse masses.
+/// Returns how many it shortened.
+#[inline(always)]
+fn limit_chunk<const M: usize>(
+    (a, b): (usize, usize),
+    rest: &[f32],
+    lanes: &mut View,
+    factor: f32,
+) -> u32 {
+    let load = |v: &[f32], at: usize| -> [f32; M] {
+        let mut out = [0.0; M];
+        out.copy_from_slice(&v[at..at + M]);
+        out
+    };
+    let (mut xa, mut ya, mut za) = (load(lanes.x, a), load(lanes.y, a), load(lanes.z, a));
+    let (mut xb, mut yb, mut zb) = (load(lanes.x, b), load(lanes.y, b), load(lanes.z, b));
+    let (wa, wb, r) = (load(lanes.w, a), load(lanes.w, b), load(rest, a));
+    let mut over = 0;
+    for c in 0..M {
+        let d = [xb[c] - xa[c], yb[c] - ya[c], zb[c] - za[c]];
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let excess = len - r[c] * factor;
+        let w = wa[c] + wb[c];
+        // False for an excess that is not a number too.
+        let on = excess > 0.0 && w != 0.0;
+        let s = excess / (w * len);
+        let (sa, sb) = (wa[c] * s, wb[c] * s);
+        // Selected, not added as zero: a zero change can flip a zero's sign.
+        let pick = |moved: f32, kept: f32| if on { moved } else { kept };
+        xa[c] = pick(xa[c] + d[0] * sa, xa[c]);
+        ya[c] = pick(ya[c] + d[1] * sa, ya[c]);
+        za[c] = pick(za[c] + d[2] * sa, za[c]);
+        xb[c] = pick(xb[c] - d[0] * sb, xb[c]);
+        yb[c] = pick(yb[c] - d[1] * sb, yb[c]);
+        zb[c] = pick(zb[c] - d[2] * sb, zb[c]);
+        over += on as u32;
+    }
+    lanes.x[a..a + M].copy_from_slice(&xa);
+    lanes.y[a..a + M].copy_from_slice(&ya);
+    lanes.z[a..a + M].copy_from_slice(&za);
+    lanes.x[b..b + M].copy_from_slice(&xb);
+    lanes.y[b..b + M].copy_from_slice(&yb);
+    lanes.z[b..b + M].copy_from_slice(&zb);
     over
 }
 
@@ -793,6 +853,69 @@ mod tests {
         // And the sweep did move them: the check can fail.
         let (_, mut fresh) = setup();
         assert_ne!(bits(&mut a), bits(&mut fresh));
+    }
+
+    /// The stretch limit as it was written first, one spring at a time.
+    fn limit_one_by_one(plan: &GridPlan, lanes: &mut Lanes, factor: f32) -> u32 {
+        let [x, y, z, _, _, _, w] = lanes.arrays_mut();
+        let mut over = 0;
+        for _ in 0..crate::solver::strain_limit::PASSES {
+            let mut this_pass = 0;
+            for p in (0..6).filter(|&p| plan.passes[p].kind == SpringKind::Stretch) {
+                for region in plan.phases.iter().flatten() {
+                    let o = region.lanes.start;
+                    let rest = &plan.rest.get(p)[o..];
+                    for seg in &region.runs[p] {
+                        for t in 0..seg.len as usize {
+                            let (a, b) = (seg.a as usize + t, seg.b as usize + t);
+                            let (ga, gb) = (o + a, o + b);
+                            let d = [x[gb] - x[ga], y[gb] - y[ga], z[gb] - z[ga]];
+                            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                            let excess = len - rest[a] * factor;
+                            let wsum = w[ga] + w[gb];
+                            if excess.is_nan() || excess <= 0.0 || wsum == 0.0 {
+                                continue;
+                            }
+                            let s = excess / (wsum * len);
+                            let (sa, sb) = (w[ga] * s, w[gb] * s);
+                            x[ga] += d[0] * sa;
+                            y[ga] += d[1] * sa;
+                            z[ga] += d[2] * sa;
+                            x[gb] -= d[0] * sb;
+                            y[gb] -= d[1] * sb;
+                            z[gb] -= d[2] * sb;
+                            this_pass += 1;
+                        }
+                    }
+                }
+            }
+            over += this_pass;
+            if this_pass == 0 {
+                break;
+            }
+        }
+        over
+    }
+
+    #[test]
+    fn the_vectorised_stretch_limit_gives_the_bits_of_one_spring_at_a_time() {
+        // Stretched by 8% along x and z: most stretch springs over 2%.
+        let stretched = || {
+            let (plan, mut lanes) = setup();
+            for v in lanes.arrays_mut().into_iter().step_by(2).take(2) {
+                v.iter_mut().for_each(|v| *v *= 1.08);
+            }
+            (plan, lanes)
+        };
+        let (plan, mut reference) = stretched();
+        let shortened = limit_one_by_one(&plan, &mut reference, 1.02);
+        assert!(shortened > 50, "only {shortened} springs over the limit");
+        for simd in [false, simd_available()] {
+            let (mut plan, mut lanes) = stretched();
+            let n = limit_stretch_with(&mut plan, &mut lanes, 1.02, Team::ALONE, simd);
+            assert_eq!(n, shortened);
+            assert_eq!(bits(&mut lanes), bits(&mut reference));
+        }
     }
 
     #[test]
