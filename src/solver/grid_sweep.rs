@@ -58,10 +58,32 @@ impl Lanes {
     }
 }
 
-/// Columns of a row are stored in this many interleaved blocks (column `c`
-/// in block `c % BLOCKS` at `c / BLOCKS`), so that the springs along a row
-/// that are independent (one and two columns apart) are contiguous too.
-const BLOCKS: usize = 4;
+/// Columns of a row are stored in interleaved blocks (column `c` in block
+/// `c % blocks` at `c / blocks`), so that the springs along a row that are
+/// independent (one and two columns apart) are contiguous too. At least
+/// this many blocks: a bend spring two columns along must start and end in
+/// different blocks, and four kept the first plans' order.
+const MIN_BLOCKS: usize = 4;
+
+/// At most this many blocks (a row's runs are then a vector step or more
+/// wherever the row has 64 columns or more).
+const MAX_BLOCKS: usize = 8;
+
+/// The blocks a row of `cols` columns is stored in: the count from
+/// [`MIN_BLOCKS`] to [`MAX_BLOCKS`] whose blocks take the fewest vector
+/// steps, the fewest blocks among equals. A 40-column curtain in four
+/// blocks of 10 filled 10 of each 16 lanes it stepped over along its rows;
+/// in five blocks of 8 it fills them all.
+fn row_blocks(cols: usize) -> usize {
+    let steps = |blocks: usize| -> usize {
+        (0..blocks)
+            .map(|j| ((cols + blocks - 1 - j) / blocks).div_ceil(WIDTH))
+            .sum()
+    };
+    (MIN_BLOCKS..=MAX_BLOCKS)
+        .min_by_key(|&b| (steps(b), b))
+        .unwrap_or(MIN_BLOCKS)
+}
 
 /// A run of independent springs whose ends are contiguous lanes: from lanes
 /// `a..a + len` to lanes `b..b + len`.
@@ -131,11 +153,17 @@ struct Region {
     runs: Vec<Vec<Segment>>,
 }
 
-/// Where each column's block starts in a row of `cols` lanes.
-fn block_offsets(cols: usize) -> [usize; BLOCKS + 1] {
-    let mut off = [0; BLOCKS + 1];
-    for j in 0..BLOCKS {
-        off[j + 1] = off[j] + (cols + BLOCKS - 1 - j) / BLOCKS;
+/// Where each column's block starts in a row of `cols` lanes stored in
+/// `blocks` blocks (entries past `blocks` repeat the row's end).
+fn block_offsets(cols: usize, blocks: usize) -> [usize; MAX_BLOCKS + 1] {
+    let mut off = [0; MAX_BLOCKS + 1];
+    for j in 0..MAX_BLOCKS {
+        let count = if j < blocks {
+            (cols + blocks - 1 - j) / blocks
+        } else {
+            0
+        };
+        off[j + 1] = off[j] + count;
     }
     off
 }
@@ -145,13 +173,13 @@ fn block_offsets(cols: usize) -> [usize; BLOCKS + 1] {
 /// the block of their first column, adjacent runs merged; lanes counted from
 /// the start of row `first_row`.
 fn segments(
-    cols: usize,
+    (cols, blocks): (usize, usize),
     rows: usize,
     (dr, dc, period): (usize, isize, usize),
     first_row: usize,
     keep: impl Fn(usize) -> bool,
 ) -> Vec<Segment> {
-    let off = block_offsets(cols);
+    let off = block_offsets(cols, blocks);
     let mut out: Vec<Segment> = Vec::new();
     let row_period = if dr == 0 { 1 } else { period };
     let base = first_row * cols;
@@ -162,17 +190,17 @@ fn segments(
                 r += row_period;
                 continue;
             }
-            for j in 0..BLOCKS {
-                // Columns c = BLOCKS k + j with 0 <= c + dc < cols.
+            for j in 0..blocks {
+                // Columns c = blocks k + j with 0 <= c + dc < cols.
                 let ks = (0..off[j + 1] - off[j]).filter(|&k| {
-                    let to = (BLOCKS * k + j) as isize + dc;
+                    let to = (blocks * k + j) as isize + dc;
                     to >= 0 && (to as usize) < cols
                 });
                 let (Some(k0), Some(k1)) = (ks.clone().next(), ks.clone().next_back()) else {
                     continue;
                 };
-                let to = (BLOCKS * k0 + j) as isize + dc;
-                let (bj, bk) = (to as usize % BLOCKS, to as usize / BLOCKS);
+                let to = (blocks * k0 + j) as isize + dc;
+                let (bj, bk) = (to as usize % blocks, to as usize / blocks);
                 let seg = Segment {
                     a: (r * cols + off[j] + k0 - base) as u32,
                     b: ((r + dr) * cols + off[bj] + bk - base) as u32,
@@ -204,14 +232,18 @@ fn apart(a: u32, b: u32, len: u32) -> bool {
 
 /// The bands of rows and the boundaries between them, each with the runs
 /// of every family `(dr, dc, period)` that lie in it.
-fn regions(cols: usize, rows: usize, families: &[(usize, isize, usize); 6]) -> [Vec<Region>; 2] {
+fn regions(
+    (cols, blocks): (usize, usize),
+    rows: usize,
+    families: &[(usize, isize, usize); 6],
+) -> [Vec<Region>; 2] {
     let bands = (rows / BAND_ROWS).max(1);
     let cut = |k: usize| k * rows / bands;
     let region = |first: usize, end: usize, keep: &dyn Fn(usize, usize) -> bool| Region {
         lanes: first * cols..end * cols,
         runs: families
             .iter()
-            .map(|&f| segments(cols, rows, f, first, |r| keep(r, f.0)))
+            .map(|&f| segments((cols, blocks), rows, f, first, |r| keep(r, f.0)))
             .collect(),
     };
     let inside = (0..bands)
@@ -236,9 +268,10 @@ impl GridPlan {
     pub fn new(grid: Grid, springs: &Springs) -> Option<GridPlan> {
         let (cols, rows) = (grid.cols, grid.rows);
         let n = cols * rows;
-        let off = block_offsets(cols);
+        let blocks = row_blocks(cols);
+        let off = block_offsets(cols, blocks);
         let lane: Vec<u32> = (0..n)
-            .map(|i| ((i / cols) * cols + off[(i % cols) % BLOCKS] + (i % cols) / BLOCKS) as u32)
+            .map(|i| ((i / cols) * cols + off[(i % cols) % blocks] + (i % cols) / blocks) as u32)
             .collect();
         let families: [(SpringKind, usize, isize, usize); 6] = [
             (SpringKind::Stretch, 0, 1, 2),
@@ -288,7 +321,11 @@ impl GridPlan {
         if count != full {
             return None;
         }
-        let phases = regions(cols, rows, &families.map(|(_, dr, dc, p)| (dr, dc, p)));
+        let phases = regions(
+            (cols, blocks),
+            rows,
+            &families.map(|(_, dr, dc, p)| (dr, dc, p)),
+        );
         let work = std::array::from_fn(|phase| {
             std::array::from_fn(|p| {
                 let runs = phases[phase].iter().flat_map(|region| &region.runs[p]);
@@ -975,6 +1012,17 @@ mod tests {
     }
 
     #[test]
+    fn rows_are_stored_in_blocks_that_fill_the_vector_steps() {
+        // Four blocks where they fill the steps (the first plans' order).
+        for cols in [2, 3, 16, 32, 64, 128, 256] {
+            assert_eq!(row_blocks(cols), 4, "{cols}");
+        }
+        // 40 columns: five blocks of 8, not four of 10.
+        assert_eq!(row_blocks(40), 5);
+        assert!((MIN_BLOCKS..=MAX_BLOCKS).contains(&row_blocks(47)));
+    }
+
+    #[test]
     fn the_runs_hold_every_spring_once_and_no_particle_twice() {
         let sizes = [
             (2, 2),
@@ -985,6 +1033,8 @@ mod tests {
             (64, 3),
             (7, 33),
             (9, 70),
+            (40, 5),
+            (47, 6),
         ];
         for (cols, rows) in sizes {
             let cloth = ClothBuilder::new(cols, rows).build().unwrap();
