@@ -3,9 +3,11 @@
 
 use parry3d::bounding_volume::Aabb;
 
+use super::contact_set::NONE;
 use super::obstacle::Obstacle;
 use super::stage::CollisionStage;
 use crate::cloth::Particles;
+use crate::math::Vector;
 
 /// Where along a spring the edge test samples.
 const EDGE_SAMPLES: [f32; 3] = [0.25, 0.5, 0.75];
@@ -29,6 +31,9 @@ impl CollisionStage {
         self.tracks.gather_box(Aabb::new(xa.min(xb), xa.max(xb)));
         for c in 0..self.tracks.candidates.len() {
             let o = self.tracks.candidates[c] as usize;
+            if self.surely_clear((a, b), o, &p.x, margin) {
+                continue;
+            }
             let obstacle = &obstacles[o];
             let pose = self.tracks.poses[o];
             // A ball: the one point of the spring nearest its centre.
@@ -96,5 +101,79 @@ impl CollisionStage {
                 }
             }
         }
+    }
+
+    /// True when the spring `a`–`b` surely stays `margin` metres outside
+    /// obstacle `o`: both ends are nearest to it, it is convex, and the
+    /// larger of its signed distance's tangent lines at the two ends (what
+    /// the particle pass found there: distance and normal) stays beyond
+    /// the margin. A convex shape's signed distance is convex along the
+    /// spring, so it never dips below those lines; at a box's edge the two
+    /// lines are its two faces, which is where the samples would have
+    /// found it.
+    fn surely_clear(&self, (a, b): (usize, usize), o: usize, x: &[Vector], margin: f32) -> bool {
+        let o32 = o as u32;
+        if o32 == NONE
+            || self.nearest[a] != o32
+            || self.nearest[b] != o32
+            || !self.tracks.is_convex(o)
+        {
+            return false;
+        }
+        let ab = x[b] - x[a];
+        let (da, db) = (self.distance[a], self.distance[b]);
+        let (sa, sb) = (self.normal[a].dot(ab), self.normal[b].dot(ab));
+        tangent_bound([da, sa], [db, sb]).is_some_and(|least| least >= margin)
+    }
+}
+
+/// The least over `t` in `[0, 1]` of `max(da + t sa, db − (1 − t) sb)`:
+/// the larger of two tangent lines of a convex function with values `da`,
+/// `db` and slopes `sa`, `sb` at the ends of `[0, 1]`, a lower bound of
+/// the function there. `None` when an input is not finite.
+fn tangent_bound([da, sa]: [f32; 2], [db, sb]: [f32; 2]) -> Option<f32> {
+    if !(da.is_finite() && sa.is_finite() && db.is_finite() && sb.is_finite()) {
+        return None;
+    }
+    let larger = |t: f32| (da + t * sa).max(db - (1.0 - t) * sb);
+    let mut least = larger(0.0).min(larger(1.0));
+    if sa != sb {
+        // Where the two lines cross.
+        let t = (db - sb - da) / (sa - sb);
+        if t > 0.0 && t < 1.0 {
+            least = least.min(larger(t));
+        }
+    }
+    Some(least)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bound is the least of the larger line, checked on a fine grid;
+    /// at a box's edge (a flat top, a vertical side) it is the wedge.
+    #[test]
+    fn the_tangent_bound_is_the_least_of_the_larger_line() {
+        let cases = [
+            ([0.02, -0.03], [0.02, 0.03]),
+            ([0.01, 0.5], [0.3, 0.1]),
+            ([0.05, -0.2], [-0.1, -0.4]),
+            ([0.02, 0.0], [0.02, 0.0]),
+        ];
+        for (a, b) in cases {
+            let bound = tangent_bound(a, b).unwrap();
+            let least = (0..=10_000)
+                .map(|k| {
+                    let t = k as f32 / 10_000.0;
+                    (a[0] + t * a[1]).max(b[0] - (1.0 - t) * b[1])
+                })
+                .fold(f32::INFINITY, f32::min);
+            assert!(
+                (bound - least).abs() < 1e-5,
+                "{a:?} {b:?}: {bound} vs {least}"
+            );
+        }
+        assert_eq!(tangent_bound([f32::NAN, 0.0], [0.0, 0.0]), None);
     }
 }

@@ -150,6 +150,14 @@ impl ObstacleTracks {
         true
     }
 
+    /// True when obstacle `o` is convex (a ball, a cuboid or a capsule):
+    /// its signed distance is then a convex function of the point.
+    pub(super) fn is_convex(&self, o: usize) -> bool {
+        self.analytic
+            .get(o)
+            .is_some_and(|a| !matches!(a, Analytic::Other))
+    }
+
     /// True when no cache was made this step.
     pub(super) fn cache_is_empty(&self) -> bool {
         self.anchors.is_empty()
