@@ -489,3 +489,37 @@ fn the_edge_pass_never_leaves_a_particle_inside() {
         }
     }
 }
+
+/// A coarse cloth whose cell is wider than a small ball falls onto it
+/// between its particles: its springs catch the ball (the edge pass), where
+/// its particles alone let it through. The drape's ball skips the edge pass
+/// (its springs are too short to dip into it); this ball must not.
+#[test]
+fn a_coarse_cloth_catches_a_small_ball_between_its_particles() {
+    let fall = |edges: bool| {
+        // Particles 0.3 m apart; the middle cell's diagonals cross over the ball.
+        let mut cloth = Simulation::new(
+            ClothBuilder::new(4, 4)
+                .size(0.9, 0.9)
+                .horizontal(Vector::new(0.0, 0.2, 0.0))
+                .build()
+                .unwrap(),
+        );
+        cloth.solver.settings.edge_collisions = edges;
+        let ball = [Obstacle::ball(Vector::ZERO, 0.08)];
+        for _ in 0..60 {
+            cloth.step(1.0 / 60.0, &ball).unwrap();
+        }
+        cloth.centroid().y
+    };
+    let caught = fall(true);
+    assert!(
+        caught > -0.5,
+        "the cloth fell past the ball: centroid at {caught} m"
+    );
+    let through = fall(false);
+    assert!(
+        through < -2.0,
+        "particles alone should let the ball through: centroid at {through} m"
+    );
+}

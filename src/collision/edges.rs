@@ -103,6 +103,25 @@ impl CollisionStage {
         }
     }
 
+    /// True when no stretch or shear spring can come within half the
+    /// `thickness` of the obstacles between its ends, whatever its ends'
+    /// neighbours: the one obstacle is a ball, every particle is at least
+    /// the thickness out of it (the particle pass saw to the free ones; the
+    /// caller checks the pinned ones), and no spring is longer than
+    /// `longest_edge` plus twice the farthest a particle has `drift`ed
+    /// since (m). A chord of length `l` with both ends `R + t` from a
+    /// ball's centre passes no nearer than `√((R + t)² − l²/4)`: on the
+    /// drape's ball no spring was ever sampled, and looking for them was
+    /// an eighth of its frame (measured).
+    pub(super) fn springs_clear_one_ball(&self, drift: f32, thickness: f32) -> bool {
+        let Some(radius) = self.tracks.one_ball() else {
+            return false;
+        };
+        let l = self.longest_edge + 2.0 * drift;
+        let (out, margin) = (radius + thickness, radius + 0.5 * thickness);
+        l.is_finite() && l * l <= 4.0 * (out * out - margin * margin)
+    }
+
     /// True when the spring `a`–`b` surely stays `margin` metres outside
     /// obstacle `o`: both ends are nearest to it, it is convex, and the
     /// larger of its signed distance's tangent lines at the two ends (what

@@ -37,6 +37,12 @@ pub(super) struct BlockScratch {
     /// Particles that came near an obstacle from outside their cached
     /// margin ([`super::tracks::ObstacleTracks::has_cached`] missed them).
     pub strays: u32,
+    /// The farthest (squared, m²) a particle of the block has moved since
+    /// the step's start, after resolution (infinite without a cache).
+    pub drift2: f32,
+    /// A pinned particle of the block lies within the thickness of an
+    /// obstacle (where no pass moves it out).
+    pub pinned_close: bool,
 }
 
 /// What a block of the pass writes, indexed from the block's first particle:
@@ -77,6 +83,8 @@ impl ParticlePass<'_> {
         let thickness = self.ctx.thickness;
         let mut contacts = 0;
         scratch.strays = 0;
+        scratch.drift2 = 0.0;
+        scratch.pinned_close = false;
         scratch.impulses.clear();
         scratch
             .impulses
@@ -126,6 +134,10 @@ impl ParticlePass<'_> {
             if !cached && out.nearest[k] != NONE {
                 scratch.strays += 1;
             }
+            if self.inv_mass[i] == 0.0 && nearest_distance < thickness {
+                scratch.pinned_close = true;
+            }
+            scratch.drift2 = scratch.drift2.max(self.tracks.drift2(i, out.x[k]));
         }
         contacts
     }

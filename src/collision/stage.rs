@@ -60,6 +60,9 @@ pub struct CollisionStage {
     /// The stretch and shear springs that may come near an obstacle this
     /// step, in spring order ([`CollisionStage::cache_candidates`]).
     pub(super) edge_watch: Vec<u32>,
+    /// The longest stretch or shear spring when the cache was made (m;
+    /// infinite without a cache).
+    pub(super) longest_edge: f32,
 }
 
 /// The springs of a block of the edge pass that it must look at, alone on
@@ -88,6 +91,7 @@ impl CollisionStage {
         self.moved.clear();
         self.moved.reserve(particles);
         self.contacts.begin_step(particles, obstacles.len());
+        self.longest_edge = f32::INFINITY;
     }
 
     /// Finds once for the step which obstacles each particle at `x` may meet
@@ -107,12 +111,21 @@ impl CollisionStage {
                 EdgeList(Vec::with_capacity(EDGE_BLOCK))
             });
         }
+        let mut longest2 = 0.0f32;
         for s in edge_springs(springs) {
             let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
             if self.tracks.has_cached(a) || self.tracks.has_cached(b) {
                 self.edge_watch.push(s as u32);
             }
+            // NaN stays out of `max`: a NaN length leaves no bound.
+            let length2 = (x[b] - x[a]).length_squared();
+            longest2 = if length2.is_nan() {
+                f32::INFINITY
+            } else {
+                longest2.max(length2)
+            };
         }
+        self.longest_edge = longest2.sqrt();
     }
 
     /// Moves the obstacles to where they are at the end of the context's substep.
@@ -291,9 +304,11 @@ impl CollisionStage {
             pass.block(range, &mut out, scratch)
         });
         // The momentum handed to the obstacles, block by block in order.
-        let mut strays = 0;
+        let (mut strays, mut drift2, mut pinned_close) = (0, 0.0f32, false);
         for block in &self.blocks[..blocks] {
             strays += block.strays;
+            drift2 = drift2.max(block.drift2);
+            pinned_close |= block.pinned_close;
             for (imp, sum) in self.tracks.impulses.iter_mut().zip(&block.impulses) {
                 if sum.contacts > 0 {
                     imp.linear += sum.linear;
@@ -304,7 +319,8 @@ impl CollisionStage {
         }
         // A stray particle may meet an obstacle along any spring.
         let watched = strays == 0 && !self.tracks.cache_is_empty();
-        if options.edges {
+        let clear = !pinned_close && self.springs_clear_one_ball(drift2.sqrt(), thickness);
+        if options.edges && !clear {
             let team = options.team;
             self.resolve_edges(particles, springs, obstacles, (thickness, team, watched));
         }

@@ -158,6 +158,23 @@ impl ObstacleTracks {
             .is_some_and(|a| !matches!(a, Analytic::Other))
     }
 
+    /// How far (squared, m²) particle `i`, now at `point`, is from where it
+    /// was when the step's cache was made (infinite without one).
+    #[inline]
+    pub(super) fn drift2(&self, i: usize, point: Vector) -> f32 {
+        self.anchors
+            .get(i)
+            .map_or(f32::INFINITY, |&anchor| (point - anchor).length_squared())
+    }
+
+    /// The ball's radius (m) when the one obstacle is a ball.
+    pub(super) fn one_ball(&self) -> Option<f32> {
+        match self.analytic[..] {
+            [Analytic::Ball(radius)] => Some(radius),
+            _ => None,
+        }
+    }
+
     /// True when no cache was made this step.
     pub(super) fn cache_is_empty(&self) -> bool {
         self.anchors.is_empty()
