@@ -7,7 +7,7 @@
 //! bits (no fused multiply-adds either way).
 
 use super::{force_in_moving_air, AirField};
-use crate::math::Vector;
+use crate::math::{simd_available, Vector};
 
 /// Triangles in a batch: eight `f32` lanes, one AVX2 register.
 const LANES: usize = 8;
@@ -33,14 +33,6 @@ pub(super) fn add_forces(
     f: &mut [Vector],
 ) {
     add_forces_with(triangles, air, (x, v), t, f, simd_available());
-}
-
-/// True when the CPU has AVX2.
-fn simd_available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return std::arch::is_x86_feature_detected!("avx2");
-    #[cfg(not(target_arch = "x86_64"))]
-    false
 }
 
 /// [`add_forces`], with the AVX2 lanes only when `simd`.

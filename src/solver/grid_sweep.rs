@@ -16,6 +16,7 @@
 //! more stretched: the boundary springs then lag a whole sweep.)
 
 use crate::cloth::{Grid, SpringKind, Springs};
+use crate::math::simd_available;
 use crate::parallel::{Disjoint, Team};
 
 use super::staggered::Staggered;
@@ -399,6 +400,30 @@ struct View<'a> {
     w: &'a [f32],
 }
 
+impl View<'_> {
+    /// The positions at lanes `at..at + M`: x, y, z.
+    #[inline(always)]
+    fn positions<const M: usize>(&self, at: usize) -> [[f32; M]; 3] {
+        [load(self.x, at), load(self.y, at), load(self.z, at)]
+    }
+
+    /// Writes positions `p` (x, y, z) to lanes `at..at + M`.
+    #[inline(always)]
+    fn set_positions<const M: usize>(&mut self, at: usize, [x, y, z]: [[f32; M]; 3]) {
+        self.x[at..at + M].copy_from_slice(&x);
+        self.y[at..at + M].copy_from_slice(&y);
+        self.z[at..at + M].copy_from_slice(&z);
+    }
+}
+
+/// Lanes `at..at + M` of `v`, as an array (a vector load for `M` = 8).
+#[inline(always)]
+fn load<const M: usize>(v: &[f32], at: usize) -> [f32; M] {
+    let mut out = [0.0; M];
+    out.copy_from_slice(&v[at..at + M]);
+    out
+}
+
 impl<'a> SharedLanes<'a> {
     /// `lanes` and the passes' multipliers `lambda`, all of one length.
     fn new(lanes: &'a mut Lanes, lambda: &'a mut Staggered) -> SharedLanes<'a> {
@@ -459,14 +484,6 @@ pub(crate) fn sweep(
     team: Team,
 ) {
     sweep_with(plan, lanes, compliance, team, simd_available());
-}
-
-/// True when the CPU has AVX2 (the vectorised kernels run there).
-fn simd_available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return std::arch::is_x86_feature_detected!("avx2");
-    #[cfg(not(target_arch = "x86_64"))]
-    false
 }
 
 /// [`sweep`], with the AVX2 kernel only when `simd`.
@@ -629,14 +646,13 @@ fn limit_chunk<const M: usize>(
     lanes: &mut View,
     factor: f32,
 ) -> u32 {
-    let load = |v: &[f32], at: usize| -> [f32; M] {
-        let mut out = [0.0; M];
-        out.copy_from_slice(&v[at..at + M]);
-        out
-    };
-    let (mut xa, mut ya, mut za) = (load(lanes.x, a), load(lanes.y, a), load(lanes.z, a));
-    let (mut xb, mut yb, mut zb) = (load(lanes.x, b), load(lanes.y, b), load(lanes.z, b));
-    let (wa, wb, r) = (load(lanes.w, a), load(lanes.w, b), load(rest, a));
+    let [mut xa, mut ya, mut za] = lanes.positions::<M>(a);
+    let [mut xb, mut yb, mut zb] = lanes.positions::<M>(b);
+    let (wa, wb, r) = (
+        load::<M>(lanes.w, a),
+        load::<M>(lanes.w, b),
+        load::<M>(rest, a),
+    );
     let mut over = 0;
     for c in 0..M {
         let d = [xb[c] - xa[c], yb[c] - ya[c], zb[c] - za[c]];
@@ -657,12 +673,8 @@ fn limit_chunk<const M: usize>(
         zb[c] = pick(zb[c] - d[2] * sb, zb[c]);
         over += on as u32;
     }
-    lanes.x[a..a + M].copy_from_slice(&xa);
-    lanes.y[a..a + M].copy_from_slice(&ya);
-    lanes.z[a..a + M].copy_from_slice(&za);
-    lanes.x[b..b + M].copy_from_slice(&xb);
-    lanes.y[b..b + M].copy_from_slice(&yb);
-    lanes.z[b..b + M].copy_from_slice(&zb);
+    lanes.set_positions(a, [xa, ya, za]);
+    lanes.set_positions(b, [xb, yb, zb]);
     over
 }
 
@@ -748,24 +760,27 @@ fn chunk<const M: usize>(
     lanes: &mut View,
     k: Compliance,
 ) {
-    let load = |v: &[f32], at: usize| -> [f32; M] {
-        let mut out = [0.0; M];
-        out.copy_from_slice(&v[at..at + M]);
-        out
-    };
-    let (mut xa, mut ya, mut za) = (load(lanes.x, a), load(lanes.y, a), load(lanes.z, a));
-    let (mut xb, mut yb, mut zb) = (load(lanes.x, b), load(lanes.y, b), load(lanes.z, b));
-    let (sxa, sya, sza) = (load(lanes.sx, a), load(lanes.sy, a), load(lanes.sz, a));
-    let (sxb, syb, szb) = (load(lanes.sx, b), load(lanes.sy, b), load(lanes.sz, b));
-    let (wa, wb) = (load(lanes.w, a), load(lanes.w, b));
-    let mut r = load(rest, a);
+    let [mut xa, mut ya, mut za] = lanes.positions::<M>(a);
+    let [mut xb, mut yb, mut zb] = lanes.positions::<M>(b);
+    let (sxa, sya, sza) = (
+        load::<M>(lanes.sx, a),
+        load::<M>(lanes.sy, a),
+        load::<M>(lanes.sz, a),
+    );
+    let (sxb, syb, szb) = (
+        load::<M>(lanes.sx, b),
+        load::<M>(lanes.sy, b),
+        load::<M>(lanes.sz, b),
+    );
+    let (wa, wb) = (load::<M>(lanes.w, a), load::<M>(lanes.w, b));
+    let mut r = load::<M>(rest, a);
     if let Some(keep) = keep {
         // A rest length of 0: no spring, no change (`project`).
         for c in 0..M {
             r[c] = if keep[c] { 0.0 } else { r[c] };
         }
     }
-    let mut l = load(lambda, a);
+    let mut l = load::<M>(lambda, a);
     let old = keep.map(|_| (xa, ya, za, xb, yb, zb, l));
     for c in 0..M {
         let motion = [
@@ -794,12 +809,8 @@ fn chunk<const M: usize>(
             }
         }
     }
-    lanes.x[a..a + M].copy_from_slice(&xa);
-    lanes.y[a..a + M].copy_from_slice(&ya);
-    lanes.z[a..a + M].copy_from_slice(&za);
-    lanes.x[b..b + M].copy_from_slice(&xb);
-    lanes.y[b..b + M].copy_from_slice(&yb);
-    lanes.z[b..b + M].copy_from_slice(&zb);
+    lanes.set_positions(a, [xa, ya, za]);
+    lanes.set_positions(b, [xb, yb, zb]);
     lambda[a..a + M].copy_from_slice(&l);
 }
 
