@@ -11,6 +11,7 @@
 //! Self-collision keeps the cloth's own layers a thickness apart
 //! ([`SelfContacts`]); [`self_intersections`] counts where they are not.
 
+mod ball_lanes;
 mod contact;
 mod contact_set;
 mod edges;

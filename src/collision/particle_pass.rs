@@ -80,8 +80,6 @@ impl ParticlePass<'_> {
         out: &mut BlockOut,
         scratch: &mut BlockScratch,
     ) -> u32 {
-        let thickness = self.ctx.thickness;
-        let mut contacts = 0;
         scratch.strays = 0;
         scratch.drift2 = 0.0;
         scratch.pinned_close = false;
@@ -89,56 +87,74 @@ impl ParticlePass<'_> {
         scratch
             .impulses
             .resize(self.obstacles.len(), ObstacleImpulse::default());
-        for (k, i) in range.enumerate() {
-            out.nearest[k] = NONE;
-            out.contacts.clear(k);
-            let cached = self
-                .tracks
-                .gather_particle(i, out.x[k], &mut scratch.candidates);
-            let mut nearest_distance = f32::INFINITY;
-            for c in 0..scratch.candidates.len() {
-                let o = scratch.candidates[c] as usize;
-                // Beyond the reach of the contact and the edge pass: as if
-                // it were not a candidate (the edge pass then takes the
-                // particle's distance to be the reach, less than it is).
-                if self.tracks.surely_beyond(o, out.x[k], self.far) {
-                    continue;
-                }
-                let Some(hit) = self.contact(o, self.x_prev[i], out.x[k]) else {
-                    continue;
-                };
-                if hit.signed_distance < nearest_distance {
-                    nearest_distance = hit.signed_distance;
-                    out.nearest[k] = o as u32;
-                    out.normal[k] = hit.normal;
-                    // Resolution below leaves a particle at least the thickness out.
-                    out.distance[k] = if self.inv_mass[i] != 0.0 {
-                        hit.signed_distance.max(thickness)
-                    } else {
-                        hit.signed_distance
-                    };
-                }
-                // A hair of slack keeps particles a solver left exactly at the
-                // thickness in contact, so friction still acts on them.
-                if self.inv_mass[i] != 0.0 && hit.signed_distance < thickness + CONTACT_SLACK {
-                    let (contact, (point, j)) =
-                        self.resolve(i, (&mut out.x[k], &mut out.v[k]), (o, hit));
-                    out.contacts.touch(k, &contact);
-                    let sum = &mut scratch.impulses[o];
-                    sum.linear += j;
-                    sum.angular_about_origin += point.cross(j);
-                    sum.contacts += 1;
-                    contacts += 1;
-                }
-            }
-            if !cached && out.nearest[k] != NONE {
-                scratch.strays += 1;
-            }
-            if self.inv_mass[i] == 0.0 && nearest_distance < thickness {
-                scratch.pinned_close = true;
-            }
-            scratch.drift2 = scratch.drift2.max(self.tracks.drift2(i, out.x[k]));
+        if let Some(ball) = self.tracks.one_ball_law(self.obstacles) {
+            return self.ball_block(&ball, range, out, scratch);
         }
+        range
+            .enumerate()
+            .map(|(k, i)| self.particle(k, i, out, scratch))
+            .sum()
+    }
+
+    /// Resolves particle `i`, the block's `k`th, against every candidate
+    /// obstacle; returns the contacts resolved.
+    pub(super) fn particle(
+        &self,
+        k: usize,
+        i: usize,
+        out: &mut BlockOut,
+        scratch: &mut BlockScratch,
+    ) -> u32 {
+        let thickness = self.ctx.thickness;
+        let mut contacts = 0;
+        out.nearest[k] = NONE;
+        out.contacts.clear(k);
+        let cached = self
+            .tracks
+            .gather_particle(i, out.x[k], &mut scratch.candidates);
+        let mut nearest_distance = f32::INFINITY;
+        for c in 0..scratch.candidates.len() {
+            let o = scratch.candidates[c] as usize;
+            // Beyond the reach of the contact and the edge pass: as if
+            // it were not a candidate (the edge pass then takes the
+            // particle's distance to be the reach, less than it is).
+            if self.tracks.surely_beyond(o, out.x[k], self.far) {
+                continue;
+            }
+            let Some(hit) = self.contact(o, self.x_prev[i], out.x[k]) else {
+                continue;
+            };
+            if hit.signed_distance < nearest_distance {
+                nearest_distance = hit.signed_distance;
+                out.nearest[k] = o as u32;
+                out.normal[k] = hit.normal;
+                // Resolution below leaves a particle at least the thickness out.
+                out.distance[k] = if self.inv_mass[i] != 0.0 {
+                    hit.signed_distance.max(thickness)
+                } else {
+                    hit.signed_distance
+                };
+            }
+            // A hair of slack keeps particles a solver left exactly at the
+            // thickness in contact, so friction still acts on them.
+            if self.inv_mass[i] != 0.0 && hit.signed_distance < thickness + CONTACT_SLACK {
+                let (contact, (point, j)) =
+                    self.resolve(i, (&mut out.x[k], &mut out.v[k]), (o, hit));
+                out.contacts.touch(k, &contact);
+                let sum = &mut scratch.impulses[o];
+                sum.linear += j;
+                sum.angular_about_origin += point.cross(j);
+                sum.contacts += 1;
+                contacts += 1;
+            }
+        }
+        if !cached && out.nearest[k] != NONE {
+            scratch.strays += 1;
+        }
+        if self.inv_mass[i] == 0.0 && nearest_distance < thickness {
+            scratch.pinned_close = true;
+        }
+        scratch.drift2 = scratch.drift2.max(self.tracks.drift2(i, out.x[k]));
         contacts
     }
 

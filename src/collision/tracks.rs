@@ -6,6 +6,7 @@
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 
+use super::ball_lanes::BallLaw;
 use super::contact::{contact_prepared, Analytic, Contact, PoseF64};
 use super::obstacle::{Obstacle, ObstacleImpulse};
 use crate::math::{Pose, Rotation, Vector};
@@ -172,6 +173,50 @@ impl ObstacleTracks {
         match self.analytic[..] {
             [Analytic::Ball(radius)] => Some(radius),
             _ => None,
+        }
+    }
+
+    /// The one obstacle as the particle pass's ball lanes take it, when it
+    /// is a ball: where it is now, its bounds, and its surface's motion.
+    pub(super) fn one_ball_law(&self, obstacles: &[Obstacle]) -> Option<BallLaw> {
+        let radius = self.one_ball()?;
+        let obstacle = obstacles.first()?;
+        let (centre, bound) = (self.poses[0].translation, self.bounds[0].1);
+        // The surface's velocity at p is `linear + angular × (p - about)`,
+        // in the terms `surface_velocity_of` uses.
+        let (linear, about) = match obstacle.body {
+            Some(_) => (self.com_velocity[0], self.com[0]),
+            None => (obstacle.linvel, centre),
+        };
+        let angular = match obstacle.body {
+            Some(_) => self.angvel[0],
+            None => obstacle.angvel,
+        };
+        Some(BallLaw {
+            centre,
+            radius,
+            bound_centre: self.centers[0],
+            bound_radius: bound,
+            linear,
+            angular,
+            about,
+            friction: obstacle.friction,
+            immovable: obstacle.body.is_none(),
+        })
+    }
+
+    /// Whether the one obstacle is a candidate of particle `i` at `point`
+    /// (exactly when [`ObstacleTracks::gather_particle`] would list it),
+    /// and whether that came from the step's cache.
+    #[inline(always)]
+    pub(super) fn one_candidate(&self, i: usize, point: Vector) -> (bool, bool) {
+        let meets = self.aabbs[0].intersects(&Aabb::new(point, point));
+        match self.anchors.get(i) {
+            Some(&anchor) if !((point - anchor).abs().max_element() > self.cache_margin) => (
+                meets && self.cache_start[i] != self.cache_start[i + 1],
+                true,
+            ),
+            _ => (meets, false),
         }
     }
 
