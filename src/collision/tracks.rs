@@ -211,13 +211,14 @@ impl ObstacleTracks {
     #[inline(always)]
     pub(super) fn one_candidate(&self, i: usize, point: Vector) -> (bool, bool) {
         let meets = self.aabbs[0].intersects(&Aabb::new(point, point));
-        match self.anchors.get(i) {
-            Some(&anchor) if !((point - anchor).abs().max_element() > self.cache_margin) => (
-                meets && self.cache_start[i] != self.cache_start[i + 1],
-                true,
-            ),
-            _ => (meets, false),
+        let Some(&anchor) = self.anchors.get(i) else {
+            return (meets, false);
+        };
+        // As `gather_particle` tests it (a NaN drift keeps the cache).
+        if (point - anchor).abs().max_element() > self.cache_margin {
+            return (meets, false);
         }
+        (meets && self.cache_start[i] != self.cache_start[i + 1], true)
     }
 
     /// True when no cache was made this step.
