@@ -183,7 +183,7 @@ fn general_contact(shape: &dyn Shape, pose: &Pose, point: Vector) -> Option<Cont
 
 /// The query point in the shape's frame, in double precision, so that the
 /// normal stays exact even a hair away from the surface.
-#[inline]
+#[inline(always)]
 fn local_f64(pose: &PoseF64, point: Vector) -> DVec3 {
     let offset = point.as_dvec3() - pose.t;
     if pose.turned {
@@ -194,7 +194,7 @@ fn local_f64(pose: &PoseF64, point: Vector) -> DVec3 {
 }
 
 /// Back to world coordinates, in single precision.
-#[inline]
+#[inline(always)]
 fn to_world(pose: &PoseF64, point: DVec3, normal: DVec3, signed: f64) -> Option<Contact> {
     finite(Contact {
         point: (pose.turn(point) + pose.t).as_vec3(),
@@ -204,7 +204,7 @@ fn to_world(pose: &PoseF64, point: DVec3, normal: DVec3, signed: f64) -> Option<
 }
 
 /// The contact, unless a non-finite input made any of it non-finite.
-#[inline]
+#[inline(always)]
 fn finite(contact: Contact) -> Option<Contact> {
     (contact.point.is_finite() && contact.normal.is_finite() && contact.signed_distance.is_finite())
         .then_some(contact)
@@ -234,7 +234,7 @@ fn ball_contact(radius: f32, pose: &PoseF64, point: Vector) -> Option<Contact> {
 
 /// A cuboid, analytically: the clamp of the point to the box when outside,
 /// the nearest face when inside.
-#[inline]
+#[inline(always)]
 fn cuboid_contact(half: Vector, pose: &PoseF64, point: Vector) -> Option<Contact> {
     let local = local_f64(pose, point);
     let h = half.as_dvec3();
