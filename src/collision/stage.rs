@@ -17,7 +17,7 @@ use crate::parallel::{Disjoint, Team};
 
 /// Springs per block of the edge pass's first look (which springs come
 /// near an obstacle), a block to a thread.
-pub(super) const EDGE_BLOCK: usize = 4096;
+const EDGE_BLOCK: usize = 4096;
 
 /// How [`CollisionStage::resolve`] goes about a substep's contacts.
 #[derive(Clone, Copy)]
@@ -56,7 +56,7 @@ pub struct CollisionStage {
     /// Per block of the particle pass: its scratch.
     blocks: Vec<BlockScratch>,
     /// Per block of [`EDGE_BLOCK`] springs: those the edge pass must look at.
-    pub(super) edge_blocks: Vec<EdgeList>,
+    edge_blocks: Vec<EdgeList>,
     /// The stretch and shear springs that may come near an obstacle this
     /// step, in spring order ([`CollisionStage::cache_candidates`]).
     pub(super) edge_watch: Vec<u32>,
@@ -69,7 +69,7 @@ pub struct CollisionStage {
 /// its cache lines (blocks on different threads push at once).
 #[derive(Debug, Default)]
 #[repr(align(128))]
-pub(super) struct EdgeList(pub(super) Vec<u32>);
+struct EdgeList(Vec<u32>);
 
 /// The springs the edge pass keeps out of obstacles: stretch, then shear.
 fn edge_springs(springs: &Springs) -> impl Iterator<Item = usize> {
@@ -324,7 +324,7 @@ impl CollisionStage {
             let team = options.team;
             self.resolve_edges(particles, springs, obstacles, (thickness, team, watched));
         }
-        let limit = (options.stretch_limit, thickness, watched, options.team);
+        let limit = (options.stretch_limit, thickness, watched);
         self.hold_stretch_limit(particles, springs, obstacles, limit);
         contacts
     }

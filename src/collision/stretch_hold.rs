@@ -14,10 +14,9 @@
 
 use super::contact_set::NONE;
 use super::obstacle::Obstacle;
-use super::stage::{CollisionStage, EdgeList, EDGE_BLOCK};
+use super::stage::CollisionStage;
 use crate::cloth::{Particles, SpringKind, Springs};
 use crate::math::Vector;
-use crate::parallel::{Disjoint, Team};
 
 /// Rounds of shortening and pushing out at most; they stop when no spring
 /// near an obstacle is over the limit.
@@ -29,17 +28,13 @@ impl CollisionStage {
     /// end near an obstacle moving by its inverse mass (the other held) and
     /// the ends losing the velocity that still stretches the spring; then
     /// moves each particle it moved back out to `thickness` of the
-    /// obstacles. Each round first finds, on the `team`'s threads, the
-    /// first spring to shorten, and starts there: the springs before it
-    /// are within the limit and none of their ends moves before they are
-    /// reached, so the bits are those of a round from the first spring.
-    /// Returns the springs shortened.
+    /// obstacles. Returns the springs shortened.
     pub(super) fn hold_stretch_limit(
         &mut self,
         particles: &mut Particles,
         springs: &Springs,
         obstacles: &[Obstacle],
-        (factor, thickness, watched, team): (f32, f32, bool, Team),
+        (factor, thickness, watched): (f32, f32, bool),
     ) -> u32 {
         if !factor.is_finite() {
             return 0;
@@ -52,30 +47,36 @@ impl CollisionStage {
         } else {
             stretch.len()
         };
-        // Out of `self` for the rounds, which push particles out through it.
-        let watch = std::mem::take(&mut self.edge_watch);
-        let spring = |k: usize| -> usize {
-            if watched {
-                watch[k] as usize
-            } else {
-                stretch.start + k
-            }
-        };
         let mut shortened = 0;
-        let mut lists = std::mem::take(&mut self.edge_blocks);
         for _ in 0..ROUNDS {
             self.moved.clear();
-            let first = self.first_over(particles, springs, (count, &spring), factor, (team, &mut lists));
-            for k in first..count {
-                let s = spring(k);
-                let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
-                let Some((d, (wa, wb), limit)) =
-                    self.over_limit(particles, springs, (s, a, b), factor)
-                else {
-                    continue;
+            for k in 0..count {
+                let s = if watched {
+                    self.edge_watch[k] as usize
+                } else {
+                    stretch.start + k
                 };
-                let Particles { x, v, .. } = &mut *particles;
-                let (len, w) = (d.length(), wa + wb);
+                let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
+                if self.nearest[a] == NONE && self.nearest[b] == NONE {
+                    continue;
+                }
+                // Only ends near an obstacle move: an end away from them
+                // has other springs, which this pass does not look at and
+                // must not stretch (it is held like a pin here).
+                let Particles { x, v, inv_mass, .. } = &mut *particles;
+                let near = |i: usize| self.nearest[i] != NONE;
+                let wa = if near(a) { inv_mass[a] } else { 0.0 };
+                let wb = if near(b) { inv_mass[b] } else { 0.0 };
+                let w = wa + wb;
+                let d = x[b] - x[a];
+                let limit = springs.rest[s] * factor;
+                let len2 = d.length_squared();
+                // Also false for a length that is not a number.
+                let over = len2 > limit * limit;
+                if !over || w == 0.0 {
+                    continue;
+                }
+                let len = len2.sqrt();
                 let n = d / len;
                 let step = n * ((len - limit) / w);
                 x[a] += step * wa;
@@ -102,74 +103,7 @@ impl CollisionStage {
             }
             self.moved = held;
         }
-        self.edge_blocks = lists;
-        self.edge_watch = watch;
         shortened
-    }
-
-    /// The first of the `count` springs (`spring(k)` the `k`th) that
-    /// [`CollisionStage::over_limit`] shortens where the particles are now,
-    /// or `count`; looked for block by block on the team's threads.
-    fn first_over(
-        &self,
-        particles: &Particles,
-        springs: &Springs,
-        (count, spring): (usize, &(dyn Fn(usize) -> usize + Sync)),
-        factor: f32,
-        (team, lists): (Team, &mut Vec<EdgeList>),
-    ) -> usize {
-        let blocks = count.div_ceil(EDGE_BLOCK);
-        if lists.len() < blocks {
-            lists.resize_with(blocks, Default::default);
-        }
-        let shared = Disjoint::new(&mut lists[..]);
-        team.sum_count(blocks, |b| {
-            // SAFETY: block `b` alone uses list `b`.
-            let list = unsafe { &mut shared.range(b..b + 1)[0].0 };
-            list.clear();
-            let first = (b * EDGE_BLOCK..((b + 1) * EDGE_BLOCK).min(count)).find(|&k| {
-                let s = spring(k);
-                let ends = (s, springs.a[s] as usize, springs.b[s] as usize);
-                self.over_limit(particles, springs, ends, factor).is_some()
-            });
-            list.extend(first.map(|k| k as u32));
-            0
-        });
-        lists[..blocks]
-            .iter()
-            .find_map(|l| l.0.first())
-            .map_or(count, |&k| k as usize)
-    }
-
-    /// Stretch spring `s` from `a` to `b` when this pass shortens it: an
-    /// end near an obstacle, longer than `factor` times its rest length,
-    /// and an end near an obstacle free. Returns it from `a` to `b` (m),
-    /// the weights of its ends (their inverse masses when near an obstacle,
-    /// else 0: an end away from them has other springs, which this pass
-    /// does not look at and must not stretch, so it is held like a pin) and
-    /// the limit (m).
-    #[inline]
-    fn over_limit(
-        &self,
-        particles: &Particles,
-        springs: &Springs,
-        (s, a, b): (usize, usize, usize),
-        factor: f32,
-    ) -> Option<(Vector, (f32, f32), f32)> {
-        if self.nearest[a] == NONE && self.nearest[b] == NONE {
-            return None;
-        }
-        let (x, inv_mass) = (&particles.x, &particles.inv_mass);
-        let near = |i: usize| self.nearest[i] != NONE;
-        let wa = if near(a) { inv_mass[a] } else { 0.0 };
-        let wb = if near(b) { inv_mass[b] } else { 0.0 };
-        let w = wa + wb;
-        let d = x[b] - x[a];
-        let limit = springs.rest[s] * factor;
-        let len2 = d.length_squared();
-        // Also false for a length that is not a number.
-        let over = len2 > limit * limit;
-        (over && w != 0.0).then_some((d, (wa, wb), limit))
     }
 }
 
