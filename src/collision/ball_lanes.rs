@@ -23,6 +23,13 @@ const LANES: usize = 8;
 /// What the lanes need of the one obstacle, a ball, where it is now.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct BallLaw {
+    /// Its bounds over the step, grown by the reach (m): a particle outside
+    /// them has no candidate.
+    pub bounds_min: Vector,
+    pub bounds_max: Vector,
+    /// How far (m, along any axis) a particle may drift from where the
+    /// step's cache found its candidates before it is looked up afresh.
+    pub cache_margin: f32,
     /// Its centre (m) and radius (m).
     pub centre: Vector,
     pub radius: f32,
@@ -59,8 +66,17 @@ struct Batch {
     v: [[f32; LANES]; 3],
     inv_mass: [f32; LANES],
     mass: [f32; LANES],
-    /// 1 when the ball is a candidate of the lane's particle.
-    candidate: [u32; LANES],
+    /// Where the particle was when the step's cache was made (m), 1 when
+    /// there is a cache, and 1 when it listed the ball for the particle.
+    anchor: [[f32; LANES]; 3],
+    has_anchor: [u32; LANES],
+    listed: [u32; LANES],
+    /// 1 when the candidates came from the cache (the particle stayed
+    /// within its margin).
+    from_cache: [u32; LANES],
+    /// How far (squared, m²) the particle is from its anchor after
+    /// resolution (infinite without a cache).
+    drift2: [f32; LANES],
     /// 1 when the ball counts (a candidate, within reach, a finite contact).
     near: [u32; LANES],
     /// 1 when the particle is inside the ball: the general pass takes it.
@@ -109,34 +125,37 @@ impl ParticlePass<'_> {
         let start = range.start;
         for chunk in (0..range.len()).step_by(LANES) {
             let count = LANES.min(range.len() - chunk);
-            let mut cached = [false; LANES];
             for lane in 0..count {
                 let (k, i) = (chunk + lane, start + chunk + lane);
                 let (x, v) = (out.x[k], out.v[k]);
-                let (candidate, from_cache) = self.tracks.one_candidate(i, x);
-                cached[lane] = from_cache;
+                let (anchor, has_anchor, listed) = match self.tracks.cache_of(i) {
+                    Some((anchor, listed)) => (anchor, true, listed),
+                    None => (Vector::ZERO, false, false),
+                };
                 for a in 0..3 {
                     batch.x[a][lane] = x[a];
                     batch.v[a][lane] = v[a];
+                    batch.anchor[a][lane] = anchor[a];
                 }
                 batch.inv_mass[lane] = self.inv_mass[i];
                 batch.mass[lane] = self.mass[i];
-                batch.candidate[lane] = candidate as u32;
+                batch.has_anchor[lane] = has_anchor as u32;
+                batch.listed[lane] = listed as u32;
             }
             // Lanes past a short last batch hold earlier particles and are
             // not read.
             solve(&mut batch, &shared, simd);
-            for (lane, &from_cache) in cached.iter().enumerate().take(count) {
+            for lane in 0..count {
                 let (k, i) = (chunk + lane, start + chunk + lane);
                 if batch.inside[lane] != 0 {
                     contacts += self.particle(k, i, out, scratch);
                     continue;
                 }
                 contacts += self.write_lane(&batch, lane, (k, i), (out, scratch), &shared);
-                if !from_cache && out.nearest[k] != NONE {
+                if batch.from_cache[lane] == 0 && out.nearest[k] != NONE {
                     scratch.strays += 1;
                 }
-                scratch.drift2 = scratch.drift2.max(self.tracks.drift2(i, out.x[k]));
+                scratch.drift2 = scratch.drift2.max(batch.drift2[lane]);
             }
         }
         contacts
@@ -210,8 +229,9 @@ unsafe fn solve_avx2(batch: &mut Batch, shared: &Shared) {
     solve_lanes(batch, shared);
 }
 
-/// The ball's law, lane by lane, without branches: the general pass's far
-/// test ([`super::tracks::ObstacleTracks::surely_beyond`]), the ball's
+/// The ball's law, lane by lane, without branches: the general pass's
+/// candidate test ([`super::tracks::ObstacleTracks::gather_particle`]) and
+/// far test ([`super::tracks::ObstacleTracks::surely_beyond`]), the ball's
 /// contact (`contact::ball_contact`) and the push out with friction
 /// (`ParticlePass::resolve`), each operation as they do it.
 #[inline(always)]
@@ -220,7 +240,15 @@ fn solve_lanes(batch: &mut Batch, shared: &Shared) {
     let thickness = shared.thickness;
     for lane in 0..LANES {
         let get = |c: &[[f32; LANES]; 3]| Vector::new(c[0][lane], c[1][lane], c[2][lane]);
-        let (x, v) = (get(&batch.x), get(&batch.v));
+        let (x, v, anchor) = (get(&batch.x), get(&batch.v), get(&batch.anchor));
+        // A candidate: within the bounds, and listed by the cache unless
+        // the particle drifted beyond its margin (a NaN drift keeps it).
+        let drifted = (x - anchor).abs().max_element() > ball.cache_margin;
+        let from_cache = batch.has_anchor[lane] != 0 && !drifted;
+        let (lo, hi) = (ball.bounds_min, ball.bounds_max);
+        let meets = (lo.x <= x.x) & (lo.y <= x.y) & (lo.z <= x.z);
+        let meets = meets & (hi.x >= x.x) & (hi.y >= x.y) & (hi.z >= x.z);
+        let candidate = meets & (!from_cache | (batch.listed[lane] != 0));
         // Far: outside the bounding sphere grown by the reach.
         let reach = ball.bound_radius + shared.far;
         let beyond = (x - ball.bound_centre).length_squared() > reach * reach;
@@ -231,7 +259,7 @@ fn solve_lanes(batch: &mut Batch, shared: &Shared) {
         let surface = ball.centre + normal * ball.radius;
         let signed = dist - ball.radius;
         let finite = surface.is_finite() && normal.is_finite() && signed.is_finite();
-        let near = batch.candidate[lane] != 0 && !beyond && finite;
+        let near = candidate && !beyond && finite;
         let free = batch.inv_mass[lane] != 0.0;
         let touching = near && free && signed < thickness + CONTACT_SLACK;
         // The push out, and friction against the surface's motion.
@@ -248,6 +276,14 @@ fn solve_lanes(batch: &mut Batch, shared: &Shared) {
         let v_new = surface_v + normal * vn.max(0.0) + rel_t_new;
         let x_new = new_x + (rel_t_new - rel_t) * shared.h;
         let j = (v - v_new) * batch.mass[lane];
+        let x_final = select(touching, x_new, x);
+        let drift2 = (x_final - anchor).length_squared();
+        batch.drift2[lane] = if batch.has_anchor[lane] != 0 {
+            drift2
+        } else {
+            f32::INFINITY
+        };
+        batch.from_cache[lane] = from_cache as u32;
         batch.near[lane] = near as u32;
         batch.inside[lane] = (near && signed < 0.0) as u32;
         batch.touching[lane] = touching as u32;

@@ -193,6 +193,9 @@ impl ObstacleTracks {
             None => obstacle.angvel,
         };
         Some(BallLaw {
+            bounds_min: self.aabbs[0].mins,
+            bounds_max: self.aabbs[0].maxs,
+            cache_margin: self.cache_margin,
             centre,
             radius,
             bound_centre: self.centers[0],
@@ -205,20 +208,12 @@ impl ObstacleTracks {
         })
     }
 
-    /// Whether the one obstacle is a candidate of particle `i` at `point`
-    /// (exactly when [`ObstacleTracks::gather_particle`] would list it),
-    /// and whether that came from the step's cache.
+    /// Where particle `i` was when the step's cache was made (m), and
+    /// whether the cache lists any obstacle for it; `None` without a cache.
     #[inline(always)]
-    pub(super) fn one_candidate(&self, i: usize, point: Vector) -> (bool, bool) {
-        let meets = self.aabbs[0].intersects(&Aabb::new(point, point));
-        let Some(&anchor) = self.anchors.get(i) else {
-            return (meets, false);
-        };
-        // As `gather_particle` tests it (a NaN drift keeps the cache).
-        if (point - anchor).abs().max_element() > self.cache_margin {
-            return (meets, false);
-        }
-        (meets && self.cache_start[i] != self.cache_start[i + 1], true)
+    pub(super) fn cache_of(&self, i: usize) -> Option<(Vector, bool)> {
+        let &anchor = self.anchors.get(i)?;
+        Some((anchor, self.cache_start[i] != self.cache_start[i + 1]))
     }
 
     /// True when no cache was made this step.
