@@ -75,8 +75,9 @@ struct Batch {
     /// within its margin).
     from_cache: [u32; LANES],
     /// How far (squared, m²) the particle is from its anchor after
-    /// resolution (infinite without a cache).
+    /// resolution (infinite without a cache), and how far it was moved.
     drift2: [f32; LANES],
+    shift2: [f32; LANES],
     /// 1 when the ball counts (a candidate, within reach, a finite contact).
     near: [u32; LANES],
     /// 1 when the particle is inside the ball: the general pass takes it.
@@ -156,6 +157,7 @@ impl ParticlePass<'_> {
                     scratch.strays += 1;
                 }
                 scratch.drift2 = scratch.drift2.max(batch.drift2[lane]);
+                scratch.shift2 = scratch.shift2.max(batch.shift2[lane]);
             }
         }
         contacts
@@ -283,6 +285,7 @@ fn solve_lanes(batch: &mut Batch, shared: &Shared) {
         } else {
             f32::INFINITY
         };
+        batch.shift2[lane] = (x_final - x).length_squared();
         batch.from_cache[lane] = from_cache as u32;
         batch.near[lane] = near as u32;
         batch.inside[lane] = (near && signed < 0.0) as u32;
@@ -426,7 +429,11 @@ mod tests {
         put(sum.angular_about_origin);
         bits.extend(nearest);
         bits.extend(distance.iter().map(|d| d.to_bits()));
-        bits.extend([scratch.drift2.to_bits(), sum.contacts]);
+        bits.extend([
+            scratch.drift2.to_bits(),
+            scratch.shift2.to_bits(),
+            sum.contacts,
+        ]);
         bits
     }
 

@@ -43,6 +43,8 @@ pub(super) struct BlockScratch {
     /// A pinned particle of the block lies within the thickness of an
     /// obstacle (where no pass moves it out).
     pub pinned_close: bool,
+    /// The farthest (squared, m²) this pass moved a particle of the block.
+    pub shift2: f32,
 }
 
 /// What a block of the pass writes, indexed from the block's first particle:
@@ -83,6 +85,7 @@ impl ParticlePass<'_> {
         scratch.strays = 0;
         scratch.drift2 = 0.0;
         scratch.pinned_close = false;
+        scratch.shift2 = 0.0;
         scratch.impulses.clear();
         scratch
             .impulses
@@ -107,6 +110,7 @@ impl ParticlePass<'_> {
     ) -> u32 {
         let thickness = self.ctx.thickness;
         let mut contacts = 0;
+        let before = out.x[k];
         out.nearest[k] = NONE;
         out.contacts.clear(k);
         let cached = self
@@ -155,6 +159,7 @@ impl ParticlePass<'_> {
             scratch.pinned_close = true;
         }
         scratch.drift2 = scratch.drift2.max(self.tracks.drift2(i, out.x[k]));
+        scratch.shift2 = scratch.shift2.max((out.x[k] - before).length_squared());
         contacts
     }
 

@@ -29,9 +29,19 @@ pub(crate) struct ResolveOptions<'a> {
     /// The material's stretch limit (times the rest length; infinite for
     /// none), held once more against the contacts.
     pub stretch_limit: f32,
+    /// When the integrator left every stretch spring within the limit: how
+    /// much (m) any of them may still lengthen before it reaches it. The
+    /// stretch limit is then not held again unless the contacts moved a
+    /// particle far enough to use that room up.
+    pub stretch_room: Option<f32>,
     /// The threads that resolve blocks of particles.
     pub team: Team<'a>,
 }
+
+/// Room (m) below the stretch limit taken to be none: the limit measures
+/// a spring by its length, the hold by its square, and the two may round
+/// apart.
+const ROOM_EPSILON: f32 = 1.0e-6;
 
 /// Two contact normals closer than this (cosine) lie on one smooth stretch of
 /// surface, where a spring between two particles outside it stays outside.
@@ -305,9 +315,11 @@ impl CollisionStage {
         });
         // The momentum handed to the obstacles, block by block in order.
         let (mut strays, mut drift2, mut pinned_close) = (0, 0.0f32, false);
+        let mut shift2 = 0.0f32;
         for block in &self.blocks[..blocks] {
             strays += block.strays;
             drift2 = drift2.max(block.drift2);
+            shift2 = shift2.max(block.shift2);
             pinned_close |= block.pinned_close;
             for (imp, sum) in self.tracks.impulses.iter_mut().zip(&block.impulses) {
                 if sum.contacts > 0 {
@@ -320,12 +332,20 @@ impl CollisionStage {
         // A stray particle may meet an obstacle along any spring.
         let watched = strays == 0 && !self.tracks.cache_is_empty();
         let clear = !pinned_close && self.springs_clear_one_ball(drift2.sqrt(), thickness);
-        if options.edges && !clear {
+        let edges = options.edges && !clear;
+        if edges {
             let team = options.team;
             self.resolve_edges(particles, springs, obstacles, (thickness, team, watched));
         }
-        let limit = (options.stretch_limit, thickness, watched);
-        self.hold_stretch_limit(particles, springs, obstacles, limit);
+        // A spring lengthened by at most twice the farthest a particle was
+        // moved here: with room for four times that (and a hair for
+        // rounding), none reaches the limit, and the hold would shorten
+        // nothing. At rest on a ball that is most substeps.
+        let roomy = |room: f32| 4.0 * shift2.sqrt() + ROOM_EPSILON < room;
+        if edges || !options.stretch_room.is_some_and(roomy) {
+            let limit = (options.stretch_limit, thickness, watched);
+            self.hold_stretch_limit(particles, springs, obstacles, limit);
+        }
         contacts
     }
 

@@ -18,6 +18,7 @@
 use crate::cloth::{Grid, SpringKind, Springs};
 use crate::math::simd_available;
 use crate::parallel::{Disjoint, Team};
+use std::sync::atomic::{AtomicU32, Ordering};
 
 use super::staggered::Staggered;
 
@@ -556,13 +557,16 @@ fn sweep_region(job: &RegionSweep, view: &mut View, lambda: &mut [f32]) {
 /// The material's stretch limit on a grid cloth: the stretch springs'
 /// runs, [`super::strain_limit::PASSES`] Gauss–Seidel passes at most (each
 /// family over the bands, then the boundaries), each spring longer than `factor`
-/// times its rest length shortened to it. Returns the springs shortened.
+/// times its rest length shortened to it. Returns the springs shortened,
+/// and when the last pass found none to shorten, the room left: how much
+/// (m) any stretch spring may still lengthen before it reaches the limit
+/// (the collision stage then knows which springs it need not hold).
 pub(crate) fn limit_stretch(
     plan: &mut GridPlan,
     lanes: &mut Lanes,
     factor: f32,
     team: Team,
-) -> u32 {
+) -> (u32, Option<f32>) {
     limit_stretch_with(plan, lanes, factor, team, simd_available())
 }
 
@@ -573,9 +577,9 @@ fn limit_stretch_with(
     factor: f32,
     team: Team,
     simd: bool,
-) -> u32 {
+) -> (u32, Option<f32>) {
     if !factor.is_finite() {
-        return 0;
+        return (0, None);
     }
     let shared = SharedLanes::new(lanes, &mut plan.lambda);
     let stretch: [bool; 6] = std::array::from_fn(|p| plan.passes[p].kind == SpringKind::Stretch);
@@ -583,6 +587,10 @@ fn limit_stretch_with(
     let mut shortened = 0;
     for _ in 0..super::strain_limit::PASSES {
         let mut over = 0;
+        // The least room of the pass's springs, as bits: a room is never
+        // negative, and non-negative floats order as their bits do (so the
+        // regions' minimum is the same in any order, on any thread).
+        let room = AtomicU32::new(f32::INFINITY.to_bits());
         for p in (0..6).filter(|&p| stretch[p]) {
             for (phase, work) in plan.phases.iter().zip(&plan.work) {
                 over += team_for(team, work[p]).sum_over(phase, |region| {
@@ -590,62 +598,85 @@ fn limit_stretch_with(
                     let mut view = unsafe { shared.view(region.lanes.clone()) };
                     let rest = &rest[p][region.lanes.clone()];
                     let runs = &region.runs[p];
-                    #[cfg(target_arch = "x86_64")]
-                    if simd {
-                        // SAFETY: `simd` only when the CPU has AVX2.
-                        return unsafe { limit_runs_avx2(runs, rest, &mut view, factor) };
-                    }
-                    let _ = simd;
-                    limit_runs(runs, rest, &mut view, factor)
+                    let (over, least) = limit_region(runs, rest, &mut view, factor, simd);
+                    room.fetch_min(least.to_bits(), Ordering::Relaxed);
+                    over
                 });
             }
         }
         shortened += over;
         if over == 0 {
-            break;
+            // Nothing moved in this pass: every spring is as it measured it.
+            return (shortened, Some(f32::from_bits(room.into_inner())));
         }
     }
-    shortened
+    (shortened, None)
+}
+
+/// [`limit_runs`], with the AVX2 kernel only when `simd`.
+fn limit_region(
+    runs: &[Segment],
+    rest: &[f32],
+    lanes: &mut View,
+    factor: f32,
+    simd: bool,
+) -> (u32, f32) {
+    #[cfg(target_arch = "x86_64")]
+    if simd {
+        // SAFETY: `simd` only when the CPU has AVX2.
+        return unsafe { limit_runs_avx2(runs, rest, lanes, factor) };
+    }
+    let _ = simd;
+    limit_runs(runs, rest, lanes, factor)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn limit_runs_avx2(runs: &[Segment], rest: &[f32], lanes: &mut View, factor: f32) -> u32 {
+unsafe fn limit_runs_avx2(
+    runs: &[Segment],
+    rest: &[f32],
+    lanes: &mut View,
+    factor: f32,
+) -> (u32, f32) {
     limit_runs(runs, rest, lanes, factor)
 }
 
-/// The stretch limit on some runs' springs; returns how many it shortened.
+/// The stretch limit on some runs' springs; returns how many it shortened,
+/// and the least room (m) left below the limit of those it did not.
 #[inline(always)]
-fn limit_runs(runs: &[Segment], rest: &[f32], lanes: &mut View, factor: f32) -> u32 {
-    let mut over = 0;
+fn limit_runs(runs: &[Segment], rest: &[f32], lanes: &mut View, factor: f32) -> (u32, f32) {
+    let (mut over, mut room) = (0, f32::INFINITY);
     for seg in runs {
         let (a, b, len) = (seg.a as usize, seg.b as usize, seg.len as usize);
         let mut done = 0;
         // A run's springs share no particle: `WIDTH` of them at once give
         // the bits of one at a time.
         while done + WIDTH <= len {
-            over += limit_chunk::<WIDTH>((a + done, b + done), rest, lanes, factor);
+            let (o, r) = limit_chunk::<WIDTH>((a + done, b + done), rest, lanes, factor);
+            (over, room) = (over + o, room.min(r));
             done += WIDTH;
         }
         while done < len {
-            over += limit_chunk::<1>((a + done, b + done), rest, lanes, factor);
+            let (o, r) = limit_chunk::<1>((a + done, b + done), rest, lanes, factor);
+            (over, room) = (over + o, room.min(r));
             done += 1;
         }
     }
-    over
+    (over, room)
 }
 
 /// The stretch limit on the `M` springs from lanes `a..a + M` to lanes
 /// `b..b + M`: each longer than `factor` times its rest length (and with
 /// a free end) shortened to it, its ends moved by their inverse masses.
-/// Returns how many it shortened.
+/// Returns how many it shortened, and the least room (m) the springs had
+/// below the limit (0 for one over it, or not a number).
 #[inline(always)]
 fn limit_chunk<const M: usize>(
     (a, b): (usize, usize),
     rest: &[f32],
     lanes: &mut View,
     factor: f32,
-) -> u32 {
+) -> (u32, f32) {
     let [mut xa, mut ya, mut za] = lanes.positions::<M>(a);
     let [mut xb, mut yb, mut zb] = lanes.positions::<M>(b);
     let (wa, wb, r) = (
@@ -653,11 +684,12 @@ fn limit_chunk<const M: usize>(
         load::<M>(lanes.w, b),
         load::<M>(rest, a),
     );
-    let mut over = 0;
+    let (mut over, mut room) = (0, [0.0f32; M]);
     for c in 0..M {
         let d = [xb[c] - xa[c], yb[c] - ya[c], zb[c] - za[c]];
         let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
         let excess = len - r[c] * factor;
+        room[c] = if excess <= 0.0 { -excess } else { 0.0 };
         let w = wa[c] + wb[c];
         // False for an excess that is not a number too.
         let on = excess > 0.0 && w != 0.0;
@@ -675,7 +707,7 @@ fn limit_chunk<const M: usize>(
     }
     lanes.set_positions(a, [xa, ya, za]);
     lanes.set_positions(b, [xb, yb, zb]);
-    over
+    (over, room.into_iter().fold(f32::INFINITY, f32::min))
 }
 
 /// One spring's projection: new positions of its ends `a` and `b` (m),
@@ -960,9 +992,52 @@ mod tests {
         assert!(shortened > 50, "only {shortened} springs over the limit");
         for simd in [false, simd_available()] {
             let (mut plan, mut lanes) = stretched();
-            let n = limit_stretch_with(&mut plan, &mut lanes, 1.02, Team::ALONE, simd);
+            let (n, _) = limit_stretch_with(&mut plan, &mut lanes, 1.02, Team::ALONE, simd);
             assert_eq!(n, shortened);
             assert_eq!(bits(&mut lanes), bits(&mut reference));
+        }
+    }
+
+    /// The room the limit reports is the least, over every stretch spring
+    /// of the cloth, of its limit less its length; and none when it could
+    /// not bring every spring within the limit.
+    #[test]
+    fn the_stretch_limit_reports_the_least_room_left() {
+        let cloth = ClothBuilder::new(13, 9).build().unwrap();
+        let springs = cloth.springs();
+        let least_room = |plan: &GridPlan, lanes: &mut Lanes, factor: f32| {
+            let [x, y, z, ..] = lanes.arrays_mut();
+            springs
+                .range(SpringKind::Stretch)
+                .map(|s| {
+                    let (a, b) = (
+                        plan.lane(springs.a[s] as usize),
+                        plan.lane(springs.b[s] as usize),
+                    );
+                    let d = [x[b] - x[a], y[b] - y[a], z[b] - z[a]];
+                    let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                    springs.rest[s] * factor - len
+                })
+                .fold(f32::INFINITY, f32::min)
+        };
+        for simd in [false, simd_available()] {
+            // Within a generous limit: the room of the tightest spring.
+            let (mut plan, mut lanes) = setup();
+            let (n, room) = limit_stretch_with(&mut plan, &mut lanes, 1.3, Team::ALONE, simd);
+            assert_eq!(n, 0);
+            let expected = least_room(&plan, &mut lanes, 1.3);
+            assert!(expected > 0.0 && expected < 0.3 * springs.rest[0]);
+            assert_eq!(room.map(f32::to_bits), Some(expected.to_bits()));
+            // Stretched 30% against a 1% limit: four passes do not bring
+            // every spring within it, and no room is claimed.
+            let (mut plan, mut lanes) = setup();
+            for v in lanes.arrays_mut().into_iter().take(3) {
+                v.iter_mut().for_each(|v| *v *= 1.3);
+            }
+            let (n, room) = limit_stretch_with(&mut plan, &mut lanes, 1.01, Team::ALONE, simd);
+            assert!(n > 0);
+            assert!(least_room(&plan, &mut lanes, 1.01) < 0.0);
+            assert_eq!(room, None);
         }
     }
 
@@ -1141,7 +1216,7 @@ mod tests {
             (bits(&mut lanes), limited)
         };
         let one = run(1, false);
-        assert!(one.1 > 0, "the limit had springs to shorten");
+        assert!(one.1 .0 > 0, "the limit had springs to shorten");
         assert_eq!(run(2, true), one);
         assert_eq!(run(1, true), one);
     }

@@ -18,6 +18,10 @@ pub(crate) struct SubstepOutcome {
     pub iterations: u32,
     /// Who applies Coulomb friction to this substep's contacts.
     pub friction: FrictionPolicy,
+    /// When the integrator left every stretch spring within the material's
+    /// limit: how much (m) any of them may still lengthen before it
+    /// reaches it (`None`: not known).
+    pub stretch_room: Option<f32>,
 }
 
 /// Advances positions `x` and velocities `v` by one substep with the
@@ -35,10 +39,12 @@ pub(crate) fn integrate(
     let explicit = |iterations| SubstepOutcome {
         iterations,
         friction: FrictionPolicy::Apply,
+        stretch_room: None,
     };
     let solved = |iterations| SubstepOutcome {
         iterations,
         friction: FrictionPolicy::AlreadySolved,
+        stretch_room: None,
     };
     Ok(match sub.settings.integrator {
         Integrator::ExplicitEuler => {
@@ -57,10 +63,10 @@ pub(crate) fn integrate(
             rk4::step(model, x, v, &mut ws.explicit, h);
             explicit(0)
         }
-        Integrator::Xpbd => {
-            xpbd::step(sub, x, v, &mut ws.xpbd);
-            explicit(0)
-        }
+        Integrator::Xpbd => SubstepOutcome {
+            stretch_room: xpbd::step(sub, x, v, &mut ws.xpbd),
+            ..explicit(0)
+        },
         Integrator::ImplicitEuler => solved(implicit_euler::step(
             sub,
             x,

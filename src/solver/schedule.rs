@@ -281,6 +281,13 @@ impl ClothSolver {
                     friction: outcome.friction,
                     edges,
                     stretch_limit: cloth.material.stretch_limit_factor(),
+                    // Self-collision and tethers move particles after the
+                    // integrator's limit: then what it measured is stale.
+                    stretch_room: if cloth.params.self_collision || cloth.params.tethers {
+                        None
+                    } else {
+                        outcome.stretch_room
+                    },
                     team,
                 },
             );

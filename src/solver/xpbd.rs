@@ -72,7 +72,15 @@ impl PlanKey {
 }
 
 /// One substep: predict, sweep over the springs, velocities from the motion.
-pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut XpbdScratch) {
+/// Returns, when the grid's stretch limit left every stretch spring within
+/// it, the room (m) the one with least had left (see
+/// [`super::grid_sweep::limit_stretch`]).
+pub(crate) fn step(
+    sub: &Substep,
+    x: &mut [Vector],
+    v: &mut [Vector],
+    ws: &mut XpbdScratch,
+) -> Option<f32> {
     let model = &sub.model;
     let h = sub.ctx.h;
     let n = x.len();
@@ -130,7 +138,7 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
             for _ in 0..sub.settings.xpbd_iterations {
                 sweep(plan, l, &compliance, team);
             }
-            limit_stretch(plan, l, model.stretch_limit, team);
+            let (_, room) = limit_stretch(plan, l, model.stretch_limit, team);
             // Velocities from the motion: `x` still holds the prediction.
             let (xs, vs, lanes) = (Disjoint::new(x), Disjoint::new(v), l.disjoint());
             plan.for_each_band(team, |band| {
@@ -148,6 +156,7 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
                     x[k] = swept;
                 }
             });
+            room
         }
         _ => {
             ws.start.clear();
@@ -169,6 +178,7 @@ pub(crate) fn step(sub: &Substep, x: &mut [Vector], v: &mut [Vector], ws: &mut X
                 let correction = x[i] - ws.predicted[i];
                 correct_velocity(&mut v[i], correction, model.inv_mass[i], h);
             }
+            None
         }
     }
 }
