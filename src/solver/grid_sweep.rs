@@ -126,6 +126,8 @@ pub(crate) struct GridPlan {
     /// Per pass: the rest length (m) of the spring leaving each lane; 0
     /// where none does.
     rest: Staggered,
+    /// The longest rest length of a stretch spring (m).
+    longest_stretch: f32,
 }
 
 /// Below this many springs, a phase of a pass runs on one thread: handing
@@ -334,6 +336,10 @@ impl GridPlan {
                 runs.map(|seg| seg.len as usize).sum()
             })
         });
+        let longest_stretch = springs
+            .range(SpringKind::Stretch)
+            .map(|s| springs.rest_lengths()[s])
+            .fold(0.0, f32::max);
         Some(GridPlan {
             lane,
             passes,
@@ -341,6 +347,7 @@ impl GridPlan {
             work,
             lambda: Staggered::new(6, n, LAMBDA_SLOT),
             rest,
+            longest_stretch,
         })
     }
 
@@ -587,9 +594,10 @@ fn limit_stretch_with(
     let mut shortened = 0;
     for _ in 0..super::strain_limit::PASSES {
         let mut over = 0;
-        // The least room of the pass's springs, as bits: a room is never
-        // negative, and non-negative floats order as their bits do (so the
-        // regions' minimum is the same in any order, on any thread).
+        // The least room of the pass's springs in squares (limit² - length²,
+        // m²), as bits: it is never negative, and non-negative floats order
+        // as their bits do (so the regions' minimum is the same in any
+        // order, on any thread).
         let room = AtomicU32::new(f32::INFINITY.to_bits());
         for p in (0..6).filter(|&p| stretch[p]) {
             for (phase, work) in plan.phases.iter().zip(&plan.work) {
@@ -606,8 +614,12 @@ fn limit_stretch_with(
         }
         shortened += over;
         if over == 0 {
-            // Nothing moved in this pass: every spring is as it measured it.
-            return (shortened, Some(f32::from_bits(room.into_inner())));
+            // Nothing moved in this pass: every spring is as it measured
+            // it. A spring with l² ≤ L² - q has L - l = (L² - l²)/(L + l) ≥
+            // q / 2L, and L is at most the longest limit.
+            let squares = f32::from_bits(room.into_inner());
+            let room = squares / (2.0 * factor * plan.longest_stretch);
+            return (shortened, Some(room));
         }
     }
     (shortened, None)
@@ -642,7 +654,7 @@ unsafe fn limit_runs_avx2(
 }
 
 /// The stretch limit on some runs' springs; returns how many it shortened,
-/// and the least room (m) left below the limit of those it did not.
+/// and the least room left below the limit (m², in squares of lengths).
 #[inline(always)]
 fn limit_runs(runs: &[Segment], rest: &[f32], lanes: &mut View, factor: f32) -> (u32, f32) {
     let (mut over, mut room) = (0, f32::INFINITY);
@@ -668,8 +680,9 @@ fn limit_runs(runs: &[Segment], rest: &[f32], lanes: &mut View, factor: f32) -> 
 /// The stretch limit on the `M` springs from lanes `a..a + M` to lanes
 /// `b..b + M`: each longer than `factor` times its rest length (and with
 /// a free end) shortened to it, its ends moved by their inverse masses.
-/// Returns how many it shortened, and the least room (m) the springs had
-/// below the limit (0 for one over it, or not a number).
+/// Returns how many it shortened, and the least room the springs had below
+/// the limit, in squares (limit² - length², m²; 0 for one over it, or not
+/// a number).
 #[inline(always)]
 fn limit_chunk<const M: usize>(
     (a, b): (usize, usize),
@@ -684,12 +697,27 @@ fn limit_chunk<const M: usize>(
         load::<M>(lanes.w, b),
         load::<M>(rest, a),
     );
-    let (mut over, mut room) = (0, [0.0f32; M]);
+    // First the squares alone: most springs are surely within the limit
+    // (by a margin far above rounding), and then nothing below changes a
+    // position, so the root, the division and the stores are not made.
+    let (mut room, mut within) = ([0.0f32; M], true);
+    for c in 0..M {
+        let d = [xb[c] - xa[c], yb[c] - ya[c], zb[c] - za[c]];
+        let len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        let limit2 = (r[c] * factor) * (r[c] * factor);
+        let q = limit2 - len2;
+        room[c] = if q >= 0.0 { q } else { 0.0 };
+        within &= len2 < limit2 * SURELY_WITHIN;
+    }
+    let room = room.into_iter().fold(f32::INFINITY, f32::min);
+    if within {
+        return (0, room);
+    }
+    let mut over = 0;
     for c in 0..M {
         let d = [xb[c] - xa[c], yb[c] - ya[c], zb[c] - za[c]];
         let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
         let excess = len - r[c] * factor;
-        room[c] = if excess <= 0.0 { -excess } else { 0.0 };
         let w = wa[c] + wb[c];
         // False for an excess that is not a number too.
         let on = excess > 0.0 && w != 0.0;
@@ -707,8 +735,12 @@ fn limit_chunk<const M: usize>(
     }
     lanes.set_positions(a, [xa, ya, za]);
     lanes.set_positions(b, [xb, yb, zb]);
-    (over, room.into_iter().fold(f32::INFINITY, f32::min))
+    (over, room)
 }
+
+/// A spring whose squared length is below this share of its squared limit
+/// is surely within it, however its length rounds (a few parts in 10⁷).
+const SURELY_WITHIN: f32 = 1.0 - 1.0e-5;
 
 /// One spring's projection: new positions of its ends `a` and `b` (m),
 /// given the motion of `b` relative to `a` since the substep's start, the
@@ -998,36 +1030,43 @@ mod tests {
         }
     }
 
-    /// The room the limit reports is the least, over every stretch spring
-    /// of the cloth, of its limit less its length; and none when it could
-    /// not bring every spring within the limit.
+    /// The room the limit reports is, over every stretch spring of the
+    /// cloth, the least of limit² - length² over twice the longest limit:
+    /// never more than the least room (limit - length), and close to it
+    /// for springs near their limit; none is claimed when the limit could
+    /// not bring every spring within it.
     #[test]
     fn the_stretch_limit_reports_the_least_room_left() {
         let cloth = ClothBuilder::new(13, 9).build().unwrap();
         let springs = cloth.springs();
-        let least_room = |plan: &GridPlan, lanes: &mut Lanes, factor: f32| {
+        let stretch = springs.range(SpringKind::Stretch);
+        let longest = stretch.clone().map(|s| springs.rest[s]).fold(0.0, f32::max);
+        // (least limit - length, least limit² - length² over 2 × longest limit)
+        let rooms = |plan: &GridPlan, lanes: &mut Lanes, factor: f32| {
             let [x, y, z, ..] = lanes.arrays_mut();
-            springs
-                .range(SpringKind::Stretch)
-                .map(|s| {
-                    let (a, b) = (
-                        plan.lane(springs.a[s] as usize),
-                        plan.lane(springs.b[s] as usize),
-                    );
-                    let d = [x[b] - x[a], y[b] - y[a], z[b] - z[a]];
-                    let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-                    springs.rest[s] * factor - len
-                })
-                .fold(f32::INFINITY, f32::min)
+            let (mut least, mut squares) = (f32::INFINITY, f32::INFINITY);
+            for s in stretch.clone() {
+                let (a, b) = (
+                    plan.lane(springs.a[s] as usize),
+                    plan.lane(springs.b[s] as usize),
+                );
+                let d = [x[b] - x[a], y[b] - y[a], z[b] - z[a]];
+                let len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                let limit = springs.rest[s] * factor;
+                least = least.min(limit - len2.sqrt());
+                squares = squares.min(limit * limit - len2);
+            }
+            (least, squares / (2.0 * factor * longest))
         };
         for simd in [false, simd_available()] {
-            // Within a generous limit: the room of the tightest spring.
+            // Within a generous limit.
             let (mut plan, mut lanes) = setup();
             let (n, room) = limit_stretch_with(&mut plan, &mut lanes, 1.3, Team::ALONE, simd);
             assert_eq!(n, 0);
-            let expected = least_room(&plan, &mut lanes, 1.3);
-            assert!(expected > 0.0 && expected < 0.3 * springs.rest[0]);
-            assert_eq!(room.map(f32::to_bits), Some(expected.to_bits()));
+            let (least, bound) = rooms(&plan, &mut lanes, 1.3);
+            assert!(least > 0.0 && least < 0.3 * longest);
+            assert!(bound <= least && bound > 0.5 * least, "{bound} {least}");
+            assert_eq!(room.map(f32::to_bits), Some(bound.to_bits()));
             // Stretched 30% against a 1% limit: four passes do not bring
             // every spring within it, and no room is claimed.
             let (mut plan, mut lanes) = setup();
@@ -1036,7 +1075,7 @@ mod tests {
             }
             let (n, room) = limit_stretch_with(&mut plan, &mut lanes, 1.01, Team::ALONE, simd);
             assert!(n > 0);
-            assert!(least_room(&plan, &mut lanes, 1.01) < 0.0);
+            assert!(rooms(&plan, &mut lanes, 1.01).0 < 0.0);
             assert_eq!(room, None);
         }
     }
