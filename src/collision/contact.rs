@@ -260,6 +260,29 @@ fn cuboid_contact(half: Vector, pose: &PoseF64, point: Vector) -> Option<Contact
     to_world(pose, surface, normal, -gaps[axis])
 }
 
+/// [`cuboid_contact`] of a point outside the box, for the particle pass's
+/// lanes (the same operations): the normal, the signed distance and
+/// whether the contact is finite; and whether the point is inside the box
+/// or on it instead, where [`cuboid_contact`] takes the nearest face and
+/// the values returned mean nothing.
+#[inline(always)]
+pub(crate) fn cuboid_outside(
+    half: Vector,
+    pose: &PoseF64,
+    point: Vector,
+) -> (Vector, f32, bool, bool) {
+    let local = local_f64(pose, point);
+    let h = half.as_dvec3();
+    let clamped = local.clamp(-h, h);
+    let offset = local - clamped;
+    let dist = offset.length();
+    let inside = clamped == local;
+    match to_world(pose, clamped, offset / dist, dist) {
+        Some(c) => (c.normal, c.signed_distance, true, inside),
+        None => (Vector::ZERO, 0.0, false, inside),
+    }
+}
+
 /// A capsule, analytically: the nearest point of its segment (placed in
 /// the world by [`PoseF64::placing`]: a capsule looks the same however it
 /// turns about its segment, so no rotation) pushed out by the radius, in

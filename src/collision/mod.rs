@@ -11,12 +11,12 @@
 //! Self-collision keeps the cloth's own layers a thickness apart
 //! ([`SelfContacts`]); [`self_intersections`] counts where they are not.
 
-mod ball_lanes;
 mod contact;
 mod contact_set;
 mod edges;
 mod neighbours;
 mod obstacle;
+mod one_obstacle_lanes;
 mod particle_pass;
 mod patches;
 mod response;

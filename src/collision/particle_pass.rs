@@ -90,8 +90,8 @@ impl ParticlePass<'_> {
         scratch
             .impulses
             .resize(self.obstacles.len(), ObstacleImpulse::default());
-        if let Some(ball) = self.tracks.one_ball_law(self.obstacles) {
-            return self.ball_block(&ball, range, out, scratch);
+        if let Some(law) = self.tracks.one_obstacle_law(self.obstacles) {
+            return self.lanes_block(&law, range, out, scratch);
         }
         range
             .enumerate()

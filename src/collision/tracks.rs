@@ -6,9 +6,9 @@
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 
-use super::ball_lanes::BallLaw;
 use super::contact::{contact_prepared, Analytic, Contact, PoseF64};
 use super::obstacle::{Obstacle, ObstacleImpulse};
+use super::one_obstacle_lanes::{LaneShape, OneObstacleLaw};
 use crate::math::{Pose, Rotation, Vector};
 
 /// Above this many obstacles, candidates come from a bounding-volume tree
@@ -176,30 +176,35 @@ impl ObstacleTracks {
         }
     }
 
-    /// The one obstacle as the particle pass's ball lanes take it, when it
-    /// is a ball: where it is now, its bounds, and its surface's motion.
-    pub(super) fn one_ball_law(&self, obstacles: &[Obstacle]) -> Option<BallLaw> {
-        let radius = self.one_ball()?;
-        let obstacle = obstacles.first()?;
-        let (centre, bound) = (self.poses[0].translation, self.bounds[0].1);
+    /// The one obstacle as the particle pass's lanes take it, when it is a
+    /// ball or a cuboid: where it is now, its bounds, and its surface's
+    /// motion.
+    pub(super) fn one_obstacle_law(&self, obstacles: &[Obstacle]) -> Option<OneObstacleLaw> {
+        let (&[analytic], [obstacle]) = (&self.analytic[..], obstacles) else {
+            return None;
+        };
+        let centre = self.poses[0].translation;
+        let shape = match analytic {
+            Analytic::Ball(radius) => LaneShape::Ball { centre, radius },
+            Analytic::Cuboid(half) => LaneShape::Cuboid {
+                half,
+                pose: self.poses_f64[0],
+            },
+            _ => return None,
+        };
         // The surface's velocity at p is `linear + angular × (p - about)`,
         // in the terms `surface_velocity_of` uses.
-        let (linear, about) = match obstacle.body {
-            Some(_) => (self.com_velocity[0], self.com[0]),
-            None => (obstacle.linvel, centre),
+        let (linear, angular, about) = match obstacle.body {
+            Some(_) => (self.com_velocity[0], self.angvel[0], self.com[0]),
+            None => (obstacle.linvel, obstacle.angvel, centre),
         };
-        let angular = match obstacle.body {
-            Some(_) => self.angvel[0],
-            None => obstacle.angvel,
-        };
-        Some(BallLaw {
+        Some(OneObstacleLaw {
+            shape,
             bounds_min: self.aabbs[0].mins,
             bounds_max: self.aabbs[0].maxs,
             cache_margin: self.cache_margin,
-            centre,
-            radius,
             bound_centre: self.centers[0],
-            bound_radius: bound,
+            bound_radius: self.bounds[0].1,
             linear,
             angular,
             about,

@@ -1,17 +1,19 @@
-//! The particle pass against one ball, eight particles at a time. A cloth
-//! draped over a ball (the `drape` scene, a ball dropped on a sheet) has a
-//! single obstacle and thousands of particles near it; the general pass
-//! gathers each particle's candidates into a list and answers them through
-//! the shape's kind, a few dozen nanoseconds a particle. Here the ball's
-//! law (the bounding test, the contact, the push out and Coulomb friction)
-//! is written without branches and run over structure-of-arrays lanes
-//! (AVX2 when the CPU has it, lane by lane otherwise), then the results are
+//! The particle pass against one ball or one cuboid, eight particles at a
+//! time. A cloth draped over a ball or a table (the `drape` and `box`
+//! scenes, a ball dropped on a sheet, a tablecloth) has a single obstacle
+//! and thousands of particles near it; the general pass gathers each
+//! particle's candidates into a list and answers them through the shape's
+//! kind, a few dozen nanoseconds a particle. Here the shape's law (the
+//! bounding test, the contact, the push out and Coulomb friction) is
+//! written without branches and run over structure-of-arrays lanes (AVX2
+//! when the CPU has it, lane by lane otherwise), then the results are
 //! written back and the momentum summed in particle order. Every operation
 //! is the general pass's, in its order, without fused multiply-adds: the
-//! bits are the same. A particle found inside the ball goes through the
+//! bits are the same. A particle found inside the shape goes through the
 //! general pass instead, which traces its path back out through the side
-//! it came in.
+//! it came in (or, in a cuboid, finds the nearest face).
 
+use super::contact::{cuboid_outside, PoseF64};
 use super::contact_set::{ParticleContact, NONE};
 use super::particle_pass::{BlockOut, BlockScratch, ParticlePass, CONTACT_SLACK};
 use super::response::FrictionPolicy;
@@ -20,9 +22,22 @@ use crate::math::{simd_available, Vector};
 /// Particles in a batch: eight `f32` lanes, one AVX2 register.
 const LANES: usize = 8;
 
-/// What the lanes need of the one obstacle, a ball, where it is now.
+/// The one obstacle's shape, where it is now.
+// Made on the stack once a block; boxing the cuboid's pose would allocate
+// every substep.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy)]
-pub(super) struct BallLaw {
+pub(super) enum LaneShape {
+    /// A ball: its centre (m) and radius (m).
+    Ball { centre: Vector, radius: f32 },
+    /// A cuboid: its half extents (m) and its pose in double precision.
+    Cuboid { half: Vector, pose: PoseF64 },
+}
+
+/// What the lanes need of the one obstacle, a ball or a cuboid, where it is now.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct OneObstacleLaw {
+    pub shape: LaneShape,
     /// Its bounds over the step, grown by the reach (m): a particle outside
     /// them has no candidate.
     pub bounds_min: Vector,
@@ -30,9 +45,6 @@ pub(super) struct BallLaw {
     /// How far (m, along any axis) a particle may drift from where the
     /// step's cache found its candidates before it is looked up afresh.
     pub cache_margin: f32,
-    /// Its centre (m) and radius (m).
-    pub centre: Vector,
-    pub radius: f32,
     /// The sphere that bounds it: centre (m) and radius (m), as the
     /// general pass's far test takes it.
     pub bound_centre: Vector,
@@ -48,10 +60,10 @@ pub(super) struct BallLaw {
     pub immovable: bool,
 }
 
-/// The same for every lane of a block: the ball, and the pass's settings.
+/// The same for every lane of a block: the obstacle, and the pass's settings.
 #[derive(Clone, Copy)]
 struct Shared {
-    ball: BallLaw,
+    law: OneObstacleLaw,
     thickness: f32,
     far: f32,
     h: f32,
@@ -67,7 +79,7 @@ struct Batch {
     inv_mass: [f32; LANES],
     mass: [f32; LANES],
     /// Where the particle was when the step's cache was made (m), 1 when
-    /// there is a cache, and 1 when it listed the ball for the particle.
+    /// there is a cache, and 1 when it listed the obstacle for the particle.
     anchor: [[f32; LANES]; 3],
     has_anchor: [u32; LANES],
     listed: [u32; LANES],
@@ -78,9 +90,9 @@ struct Batch {
     /// resolution (infinite without a cache), and how far it was moved.
     drift2: [f32; LANES],
     shift2: [f32; LANES],
-    /// 1 when the ball counts (a candidate, within reach, a finite contact).
+    /// 1 when the obstacle counts (a candidate, within reach, a finite contact).
     near: [u32; LANES],
-    /// 1 when the particle is inside the ball: the general pass takes it.
+    /// 1 when the particle is inside the obstacle: the general pass takes it.
     inside: [u32; LANES],
     /// 1 when the particle touches and was resolved.
     touching: [u32; LANES],
@@ -89,33 +101,33 @@ struct Batch {
     x_out: [[f32; LANES]; 3],
     v_out: [[f32; LANES]; 3],
     surface_velocity: [[f32; LANES]; 3],
-    /// Where (m) and how much momentum (N·s) the particle handed the ball.
+    /// Where (m) and how much momentum (N·s) the particle handed the obstacle.
     point: [[f32; LANES]; 3],
     impulse: [[f32; LANES]; 3],
 }
 
 impl ParticlePass<'_> {
-    /// [`ParticlePass::block`] when the one obstacle is `ball`.
-    pub(super) fn ball_block(
+    /// [`ParticlePass::block`] when the one obstacle is `law`'s.
+    pub(super) fn lanes_block(
         &self,
-        ball: &BallLaw,
+        law: &OneObstacleLaw,
         range: std::ops::Range<usize>,
         out: &mut BlockOut,
         scratch: &mut BlockScratch,
     ) -> u32 {
-        self.ball_block_with(ball, range, out, (scratch, simd_available()))
+        self.lanes_block_with(law, range, out, (scratch, simd_available()))
     }
 
-    /// [`ParticlePass::ball_block`], with the AVX2 lanes only when `simd`.
-    fn ball_block_with(
+    /// [`ParticlePass::lanes_block`], with the AVX2 lanes only when `simd`.
+    fn lanes_block_with(
         &self,
-        ball: &BallLaw,
+        law: &OneObstacleLaw,
         range: std::ops::Range<usize>,
         out: &mut BlockOut,
         (scratch, simd): (&mut BlockScratch, bool),
     ) -> u32 {
         let shared = Shared {
-            ball: *ball,
+            law: *law,
             thickness: self.ctx.thickness,
             far: self.far,
             h: self.ctx.h,
@@ -192,16 +204,16 @@ impl ParticlePass<'_> {
         }
         out.x[k] = get(&batch.x_out);
         out.v[k] = get(&batch.v_out);
-        let ball = &shared.ball;
+        let law = &shared.law;
         out.contacts.touch(
             k,
             &ParticleContact {
                 obstacle: 0,
                 normal: get(&batch.normal),
                 surface_velocity: get(&batch.surface_velocity),
-                immovable: ball.immovable,
+                immovable: law.immovable,
                 gap: 0.0,
-                friction: ball.friction,
+                friction: law.friction,
             },
         );
         let (point, j) = (get(&batch.point), get(&batch.impulse));
@@ -213,7 +225,7 @@ impl ParticlePass<'_> {
     }
 }
 
-/// Every lane of the batch through the ball's law.
+/// Every lane of the batch through the obstacle's law.
 fn solve(batch: &mut Batch, shared: &Shared, simd: bool) {
     #[cfg(target_arch = "x86_64")]
     if simd {
@@ -231,48 +243,76 @@ unsafe fn solve_avx2(batch: &mut Batch, shared: &Shared) {
     solve_lanes(batch, shared);
 }
 
-/// The ball's law, lane by lane, without branches: the general pass's
+/// The obstacle's law, lane by lane, without branches: the general pass's
 /// candidate test ([`super::tracks::ObstacleTracks::gather_particle`]) and
-/// far test ([`super::tracks::ObstacleTracks::surely_beyond`]), the ball's
-/// contact (`contact::ball_contact`) and the push out with friction
-/// (`ParticlePass::resolve`), each operation as they do it.
+/// far test ([`super::tracks::ObstacleTracks::surely_beyond`]), the shape's
+/// contact (`contact::ball_contact`, [`cuboid_outside`]) and the push out
+/// with friction (`ParticlePass::resolve`), each operation as they do it.
 #[inline(always)]
 fn solve_lanes(batch: &mut Batch, shared: &Shared) {
-    let ball = &shared.ball;
+    match shared.law.shape {
+        LaneShape::Ball { centre, radius } => lanes_with(
+            batch,
+            shared,
+            #[inline(always)]
+            |x| {
+                let offset = x - centre;
+                let dist = offset.length();
+                let normal = select(dist > 1e-9, offset / dist, Vector::Y);
+                let surface = centre + normal * radius;
+                let signed = dist - radius;
+                let finite = surface.is_finite() && normal.is_finite() && signed.is_finite();
+                // Inside where the contact says so (a traced path then).
+                (normal, signed, finite, finite && signed < 0.0)
+            },
+        ),
+        LaneShape::Cuboid { half, pose } => lanes_with(
+            batch,
+            shared,
+            #[inline(always)]
+            |x| cuboid_outside(half, &pose, x),
+        ),
+    }
+}
+
+/// [`solve_lanes`] with the shape's contact `contact`: of a point, the
+/// outward normal, the signed distance (m), whether they are finite, and
+/// whether the general pass must take the point (inside).
+#[inline(always)]
+fn lanes_with(
+    batch: &mut Batch,
+    shared: &Shared,
+    contact: impl Fn(Vector) -> (Vector, f32, bool, bool),
+) {
+    let law = &shared.law;
     let thickness = shared.thickness;
     for lane in 0..LANES {
         let get = |c: &[[f32; LANES]; 3]| Vector::new(c[0][lane], c[1][lane], c[2][lane]);
         let (x, v, anchor) = (get(&batch.x), get(&batch.v), get(&batch.anchor));
         // A candidate: within the bounds, and listed by the cache unless
         // the particle drifted beyond its margin (a NaN drift keeps it).
-        let drifted = (x - anchor).abs().max_element() > ball.cache_margin;
+        let drifted = (x - anchor).abs().max_element() > law.cache_margin;
         let from_cache = batch.has_anchor[lane] != 0 && !drifted;
-        let (lo, hi) = (ball.bounds_min, ball.bounds_max);
+        let (lo, hi) = (law.bounds_min, law.bounds_max);
         let meets = (lo.x <= x.x) & (lo.y <= x.y) & (lo.z <= x.z);
         let meets = meets & (hi.x >= x.x) & (hi.y >= x.y) & (hi.z >= x.z);
         let candidate = meets & (!from_cache | (batch.listed[lane] != 0));
         // Far: outside the bounding sphere grown by the reach.
-        let reach = ball.bound_radius + shared.far;
-        let beyond = (x - ball.bound_centre).length_squared() > reach * reach;
-        // The contact.
-        let offset = x - ball.centre;
-        let dist = offset.length();
-        let normal = select(dist > 1e-9, offset / dist, Vector::Y);
-        let surface = ball.centre + normal * ball.radius;
-        let signed = dist - ball.radius;
-        let finite = surface.is_finite() && normal.is_finite() && signed.is_finite();
+        let reach = law.bound_radius + shared.far;
+        let beyond = (x - law.bound_centre).length_squared() > reach * reach;
+        let (normal, signed, finite, inside) = contact(x);
         let near = candidate && !beyond && finite;
         let free = batch.inv_mass[lane] != 0.0;
         let touching = near && free && signed < thickness + CONTACT_SLACK;
         // The push out, and friction against the surface's motion.
         let new_x = x + normal * (thickness - signed).max(0.0);
-        let surface_v = ball.linear + ball.angular.cross(new_x - ball.about);
+        let surface_v = law.linear + law.angular.cross(new_x - law.about);
         let rel = v - surface_v;
         let vn = rel.dot(normal);
         let removed = (-vn).max(0.0);
         let rel_t = rel - normal * vn;
         let slip = rel_t.length();
-        let limit = ball.friction * removed;
+        let limit = law.friction * removed;
         let slowed = select(slip <= limit, Vector::ZERO, rel_t * (1.0 - limit / slip));
         let rel_t_new = select(shared.friction_applies, slowed, rel_t);
         let v_new = surface_v + normal * vn.max(0.0) + rel_t_new;
@@ -288,7 +328,7 @@ fn solve_lanes(batch: &mut Batch, shared: &Shared) {
         batch.shift2[lane] = (x_final - x).length_squared();
         batch.from_cache[lane] = from_cache as u32;
         batch.near[lane] = near as u32;
-        batch.inside[lane] = (near && signed < 0.0) as u32;
+        batch.inside[lane] = (candidate && !beyond && inside) as u32;
         batch.touching[lane] = touching as u32;
         batch.signed_distance[lane] = signed;
         for a in 0..3 {
@@ -322,7 +362,8 @@ mod tests {
 
     const N: usize = 61;
 
-    /// Particles around a ball of radius 0.5 at the origin: far, near,
+    /// Particles around a ball of radius 0.5 at the origin (and cuboids of
+    /// about that size, which some are inside): far, near,
     /// touching, inside (some entered this substep, some were in before),
     /// one at the centre, every seventh pinned; the first ten anchored far
     /// from where they are (not from the step's cache). Positions at the
@@ -334,8 +375,13 @@ mod tests {
         for i in 0..N {
             let s = i as f32;
             let dir = Vector::new((1.3 * s).sin(), (0.7 * s).cos(), (2.1 * s).sin()).normalize();
-            // From 0.05 m inside to 0.15 m out (0.12 m beyond the reach).
-            let d = 0.45 + 0.2 * ((s * 0.37) % 1.0);
+            // From 0.05 m inside to 0.15 m out of the ball (0.12 m beyond
+            // the reach); every eleventh far beyond the cuboids' too.
+            let d = if i % 11 == 10 {
+                1.0
+            } else {
+                0.45 + 0.2 * ((s * 0.37) % 1.0)
+            };
             x.push(dir * d);
             let back = if i % 3 == 0 { 0.2 } else { 0.01 };
             prev.push(dir * (d + back));
@@ -352,8 +398,8 @@ mod tests {
     /// What a pass left: positions, velocities, nearest obstacles, normals,
     /// distances, contacts, the momentum handed to the ball and the block's
     /// counts, as bits.
-    fn outcome(ball: &Obstacle, friction: FrictionPolicy, lanes: Option<bool>) -> Vec<u32> {
-        let obstacles = [ball.clone()];
+    fn outcome(obstacle: &Obstacle, friction: FrictionPolicy, lanes: Option<bool>) -> Vec<u32> {
+        let obstacles = [obstacle.clone()];
         let mut tracks = ObstacleTracks::default();
         let (dt, h) = (1.0 / 60.0, 1.0 / 600.0);
         tracks.begin_step(&obstacles, dt, 0.12);
@@ -406,8 +452,8 @@ mod tests {
             };
             match lanes {
                 Some(simd) => {
-                    let law = tracks.one_ball_law(&obstacles).unwrap();
-                    pass.ball_block_with(&law, 0..N, &mut out, (&mut scratch, simd))
+                    let law = tracks.one_obstacle_law(&obstacles).unwrap();
+                    pass.lanes_block_with(&law, 0..N, &mut out, (&mut scratch, simd))
                 }
                 None => (0..N)
                     .map(|k| pass.particle(k, k, &mut out, &mut scratch))
@@ -437,12 +483,8 @@ mod tests {
         bits
     }
 
-    /// The lanes give the general pass's bits, with and without AVX2, for
-    /// a fixed, a moving and a dynamic ball, with friction applied or
-    /// already solved; and every case the lanes distinguish occurs.
-    #[test]
-    fn the_lanes_give_the_general_pass_s_bits() {
-        let fixed = Obstacle::ball(Vector::ZERO, 0.5).with_friction(0.6);
+    /// A fixed, a moving (and turning) and a dynamic version of `fixed`.
+    fn in_motion(fixed: Obstacle) -> [Obstacle; 3] {
         let moving = fixed
             .clone()
             .with_velocity(Vector::new(0.5, 2.0, -0.3), Vector::new(1.0, -2.0, 3.0));
@@ -453,19 +495,36 @@ mod tests {
             center_of_mass: Vector::new(0.01, 0.0, 0.0),
             acceleration: Vector::new(0.0, -9.81, 0.0),
         });
-        for ball in [fixed, moving, dynamic] {
+        [fixed, moving, dynamic]
+    }
+
+    /// The lanes give the general pass's bits, with and without AVX2, for
+    /// a fixed, a moving and a dynamic ball and cuboid (laid along the
+    /// axes, and turned), with friction applied or already solved; and
+    /// every case the lanes distinguish occurs.
+    #[test]
+    fn the_lanes_give_the_general_pass_s_bits() {
+        let ball = Obstacle::ball(Vector::ZERO, 0.5).with_friction(0.6);
+        let half = Vector::new(0.42, 0.36, 0.47);
+        let laid = Obstacle::cuboid(half, crate::math::Pose::IDENTITY).with_friction(0.6);
+        let turn = crate::math::Rotation::from_scaled_axis(Vector::new(0.3, -0.5, 0.2));
+        let turned = Obstacle::cuboid(half, crate::math::Pose::from_parts(Vector::ZERO, turn))
+            .with_friction(0.6);
+        let obstacles = [ball, laid, turned].into_iter().flat_map(in_motion);
+        for obstacle in obstacles {
             for friction in [FrictionPolicy::Apply, FrictionPolicy::AlreadySolved] {
-                let general = outcome(&ball, friction, None);
+                let general = outcome(&obstacle, friction, None);
                 let (contacts, strays, pinned_close) = (general[0], general[1], general[2]);
                 assert!(
                     contacts > 10 && contacts < N as u32 - 10,
                     "{contacts} contacts"
                 );
                 assert!(strays > 0 && pinned_close == 1);
-                let nearest = &general[general.len() - 2 - 2 * N..general.len() - 2 - N];
+                let nearest = &general[general.len() - 3 - 2 * N..general.len() - 3 - N];
                 assert!(nearest.contains(&NONE), "none beyond the reach");
                 for simd in [false, simd_available()] {
-                    assert_eq!(outcome(&ball, friction, Some(simd)), general, "simd {simd}");
+                    let lanes = outcome(&obstacle, friction, Some(simd));
+                    assert_eq!(lanes, general, "simd {simd}: {obstacle:?}");
                 }
             }
         }
