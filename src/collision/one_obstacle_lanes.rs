@@ -15,7 +15,7 @@
 
 use super::contact::{cuboid_outside, PoseF64};
 use super::contact_set::{ParticleContact, NONE};
-use super::particle_pass::{BlockOut, BlockScratch, ParticlePass, CONTACT_SLACK};
+use super::particle_pass::{push_out, select, BlockOut, BlockScratch, ParticlePass, CONTACT_SLACK};
 use super::response::FrictionPolicy;
 use crate::math::{simd_available, Vector};
 
@@ -305,18 +305,16 @@ fn lanes_with(
         let free = batch.inv_mass[lane] != 0.0;
         let touching = near && free && signed < thickness + CONTACT_SLACK;
         // The push out, and friction against the surface's motion.
-        let new_x = x + normal * (thickness - signed).max(0.0);
-        let surface_v = law.linear + law.angular.cross(new_x - law.about);
-        let rel = v - surface_v;
-        let vn = rel.dot(normal);
-        let removed = (-vn).max(0.0);
-        let rel_t = rel - normal * vn;
-        let slip = rel_t.length();
-        let limit = law.friction * removed;
-        let slowed = select(slip <= limit, Vector::ZERO, rel_t * (1.0 - limit / slip));
-        let rel_t_new = select(shared.friction_applies, slowed, rel_t);
-        let v_new = surface_v + normal * vn.max(0.0) + rel_t_new;
-        let x_new = new_x + (rel_t_new - rel_t) * shared.h;
+        let pushed = push_out(
+            (x, v),
+            (normal, signed),
+            thickness,
+            #[inline(always)]
+            |p| law.linear + law.angular.cross(p - law.about),
+            (law.friction, shared.friction_applies, shared.h),
+        );
+        let (new_x, surface_v, v_new, x_new) =
+            (pushed.surface, pushed.surface_velocity, pushed.v, pushed.x);
         let j = (v - v_new) * batch.mass[lane];
         let x_final = select(touching, x_new, x);
         let drift2 = (x_final - anchor).length_squared();
@@ -340,16 +338,6 @@ fn lanes_with(
             batch.impulse[a][lane] = j[a];
         }
     }
-}
-
-/// `a` where `pick`, else `b`, coordinate by coordinate.
-#[inline(always)]
-fn select(pick: bool, a: Vector, b: Vector) -> Vector {
-    Vector::new(
-        if pick { a.x } else { b.x },
-        if pick { a.y } else { b.y },
-        if pick { a.z } else { b.z },
-    )
 }
 
 #[cfg(test)]

@@ -214,24 +214,21 @@ impl ParticlePass<'_> {
     ) -> (ParticleContact, (Vector, Vector)) {
         let (ctx, obstacle) = (self.ctx, &self.obstacles[o]);
         let n = hit.normal;
-        let new_x = *x + n * (ctx.thickness - hit.signed_distance).max(0.0);
-        let surface_v = self.tracks.surface_velocity_of(self.obstacles, o, new_x);
         let v_old = *v;
-        let rel = v_old - surface_v;
-        let vn = rel.dot(n);
-        // The normal velocity taken away bounds what friction may take away.
-        let removed = (-vn).max(0.0);
-        let rel_t = rel - n * vn;
-        let slip = rel_t.length();
-        let limit = obstacle.friction * removed;
-        let rel_t_new = match self.friction {
-            FrictionPolicy::AlreadySolved => rel_t,
-            FrictionPolicy::Apply if slip <= limit => Vector::ZERO,
-            FrictionPolicy::Apply => rel_t * (1.0 - limit / slip),
-        };
-        let v_new = surface_v + n * vn.max(0.0) + rel_t_new;
-        // Undo the slip friction forbade during this substep.
-        *x = new_x + (rel_t_new - rel_t) * ctx.h;
+        let pushed = push_out(
+            (*x, v_old),
+            (n, hit.signed_distance),
+            ctx.thickness,
+            #[inline(always)]
+            |p| self.tracks.surface_velocity_of(self.obstacles, o, p),
+            (
+                obstacle.friction,
+                self.friction == FrictionPolicy::Apply,
+                ctx.h,
+            ),
+        );
+        let (new_x, surface_v, v_new) = (pushed.surface, pushed.surface_velocity, pushed.v);
+        *x = pushed.x;
         *v = v_new;
         let contact = ParticleContact {
             obstacle: o as u32,
@@ -243,4 +240,60 @@ impl ParticlePass<'_> {
         };
         (contact, (new_x, (v_old - v_new) * self.mass[i]))
     }
+}
+
+/// What [`push_out`] gives a particle.
+pub(super) struct PushOut {
+    /// Where it was pushed out to, before friction (m): where its momentum
+    /// is handed to the obstacle.
+    pub surface: Vector,
+    /// The surface's velocity there (m/s).
+    pub surface_velocity: Vector,
+    /// Its position (m) and velocity (m/s) after the push and friction.
+    pub x: Vector,
+    pub v: Vector,
+}
+
+/// Pushes a particle at `x` moving at `v` out along the unit normal `n` to
+/// `thickness` from a surface `signed` metres away (never pulls it in),
+/// whose material moves at `surface_velocity(p)` at `p`; takes away the
+/// velocity into the surface and, when friction `applies`, Coulomb friction
+/// of coefficient `friction` (the normal velocity taken away bounds what it
+/// may take away), undoing the slip it forbade over the substep of `h`
+/// seconds. Without branches: the particle pass's lanes run it too, so
+/// both give the same bits.
+#[inline(always)]
+pub(super) fn push_out(
+    (x, v): (Vector, Vector),
+    (n, signed): (Vector, f32),
+    thickness: f32,
+    surface_velocity: impl Fn(Vector) -> Vector,
+    (friction, applies, h): (f32, bool, f32),
+) -> PushOut {
+    let surface = x + n * (thickness - signed).max(0.0);
+    let surface_v = surface_velocity(surface);
+    let rel = v - surface_v;
+    let vn = rel.dot(n);
+    let removed = (-vn).max(0.0);
+    let rel_t = rel - n * vn;
+    let slip = rel_t.length();
+    let limit = friction * removed;
+    let slowed = select(slip <= limit, Vector::ZERO, rel_t * (1.0 - limit / slip));
+    let rel_t_new = select(applies, slowed, rel_t);
+    PushOut {
+        surface,
+        surface_velocity: surface_v,
+        x: surface + (rel_t_new - rel_t) * h,
+        v: surface_v + n * vn.max(0.0) + rel_t_new,
+    }
+}
+
+/// `a` where `pick`, else `b`, coordinate by coordinate.
+#[inline(always)]
+pub(super) fn select(pick: bool, a: Vector, b: Vector) -> Vector {
+    Vector::new(
+        if pick { a.x } else { b.x },
+        if pick { a.y } else { b.y },
+        if pick { a.z } else { b.z },
+    )
 }
