@@ -16,6 +16,7 @@ mod contact_set;
 mod edges;
 mod neighbours;
 mod obstacle;
+mod one_obstacle;
 mod one_obstacle_lanes;
 mod particle_pass;
 mod patches;

@@ -13,52 +13,15 @@
 //! general pass instead, which traces its path back out through the side
 //! it came in (or, in a cuboid, finds the nearest face).
 
-use super::contact::{cuboid_outside, PoseF64};
+use super::contact::cuboid_outside;
 use super::contact_set::{ParticleContact, NONE};
+use super::one_obstacle::{LaneShape, OneObstacleLaw};
 use super::particle_pass::{push_out, select, BlockOut, BlockScratch, ParticlePass, CONTACT_SLACK};
 use super::response::FrictionPolicy;
 use crate::math::{simd_available, Vector};
 
 /// Particles in a batch: eight `f32` lanes, one AVX2 register.
 const LANES: usize = 8;
-
-/// The one obstacle's shape, where it is now.
-// Made on the stack once a block; boxing the cuboid's pose would allocate
-// every substep.
-#[allow(clippy::large_enum_variant)]
-#[derive(Debug, Clone, Copy)]
-pub(super) enum LaneShape {
-    /// A ball: its centre (m) and radius (m).
-    Ball { centre: Vector, radius: f32 },
-    /// A cuboid: its half extents (m) and its pose in double precision.
-    Cuboid { half: Vector, pose: PoseF64 },
-}
-
-/// What the lanes need of the one obstacle, a ball or a cuboid, where it is now.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct OneObstacleLaw {
-    pub shape: LaneShape,
-    /// Its bounds over the step, grown by the reach (m): a particle outside
-    /// them has no candidate.
-    pub bounds_min: Vector,
-    pub bounds_max: Vector,
-    /// How far (m, along any axis) a particle may drift from where the
-    /// step's cache found its candidates before it is looked up afresh.
-    pub cache_margin: f32,
-    /// The sphere that bounds it: centre (m) and radius (m), as the
-    /// general pass's far test takes it.
-    pub bound_centre: Vector,
-    pub bound_radius: f32,
-    /// Its surface's velocity at `p` is `linear + angular × (p - about)`
-    /// (m/s, rad/s, m).
-    pub linear: Vector,
-    pub angular: Vector,
-    pub about: Vector,
-    /// Coulomb friction coefficient.
-    pub friction: f32,
-    /// Fixed or kinematic: the cloth's push does not move it.
-    pub immovable: bool,
-}
 
 /// The same for every lane of a block: the obstacle, and the pass's settings.
 #[derive(Clone, Copy)]

@@ -8,7 +8,7 @@ use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 
 use super::contact::{contact_prepared, Analytic, Contact, PoseF64};
 use super::obstacle::{Obstacle, ObstacleImpulse};
-use super::one_obstacle_lanes::{LaneShape, OneObstacleLaw};
+use super::one_obstacle::{LaneShape, OneObstacleLaw};
 use crate::math::{Pose, Rotation, Vector};
 
 /// Above this many obstacles, candidates come from a bounding-volume tree
