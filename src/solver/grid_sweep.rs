@@ -482,9 +482,12 @@ impl<'a> SharedLanes<'a> {
     }
 }
 
-/// One Gauss–Seidel sweep over every spring: pass by pass in the plan's
-/// order, each pass over the bands, then the boundaries; on several
-/// threads of `team`, with the same bits.
+/// One Gauss–Seidel sweep over every spring: the bands, then the
+/// boundaries between them, each region's passes in the plan's order; on
+/// several threads of `team`, with the same bits. A region takes all its
+/// passes at once: one handout per phase rather than per pass and phase
+/// (a handshake costs a few microseconds, a pass in a band about as
+/// much), and its lanes are still in cache for the next pass.
 pub(crate) fn sweep(
     plan: &mut GridPlan,
     lanes: &mut Lanes,
@@ -505,18 +508,18 @@ fn sweep_with(
     let shared = SharedLanes::new(lanes, &mut plan.lambda);
     let k: [Compliance; 6] = std::array::from_fn(|p| compliance[plan.passes[p].kind.index()]);
     let rest: [&[f32]; 6] = std::array::from_fn(|p| plan.rest.get(p));
-    for p in 0..6 {
-        for (phase, work) in plan.phases.iter().zip(&plan.work) {
-            team_for(team, work[p]).sum_over(phase, |region| {
-                // SAFETY: the regions of a phase touch disjoint lanes (the plan
-                // is built so, and tested), so the views alive at once are
-                // disjoint; `lanes` and the passes are borrowed for the sweep.
-                let (mut view, lambda) = unsafe {
-                    (
-                        shared.view(region.lanes.clone()),
-                        shared.lambda(p, region.lanes.clone()),
-                    )
-                };
+    for (phase, work) in plan.phases.iter().zip(&plan.work) {
+        team_for(team, work.iter().sum()).sum_over(phase, |region| {
+            // SAFETY: the regions of a phase touch disjoint lanes (the plan
+            // is built so, and tested), so the views alive at once are
+            // disjoint; `lanes` and the passes are borrowed for the sweep.
+            let (mut view, lambda): (_, [&mut [f32]; 6]) = unsafe {
+                (
+                    shared.view(region.lanes.clone()),
+                    std::array::from_fn(|p| shared.lambda(p, region.lanes.clone())),
+                )
+            };
+            for (p, lambda) in lambda.into_iter().enumerate() {
                 let job = RegionSweep {
                     region,
                     p,
@@ -527,13 +530,13 @@ fn sweep_with(
                 if simd {
                     // SAFETY: `simd` only when the CPU has AVX2.
                     unsafe { sweep_region_avx2(&job, &mut view, lambda) };
-                    return 0;
+                    continue;
                 }
                 let _ = simd;
                 sweep_region(&job, &mut view, lambda);
-                0
-            });
-        }
+            }
+            0
+        });
     }
 }
 
@@ -546,6 +549,8 @@ struct RegionSweep<'a> {
     k: &'a [Compliance; 6],
 }
 
+// One family a call, not the region's six: the six in one function made
+// one of 60 KB whose registers spilled (the sweep 7% slower on one thread).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn sweep_region_avx2(job: &RegionSweep, view: &mut View, lambda: &mut [f32]) {
@@ -562,8 +567,8 @@ fn sweep_region(job: &RegionSweep, view: &mut View, lambda: &mut [f32]) {
 }
 
 /// The material's stretch limit on a grid cloth: the stretch springs'
-/// runs, [`super::strain_limit::PASSES`] Gauss–Seidel passes at most (each
-/// family over the bands, then the boundaries), each spring longer than `factor`
+/// runs, [`super::strain_limit::PASSES`] Gauss–Seidel passes at most (the
+/// bands, then the boundaries, each region's families in turn), each spring longer than `factor`
 /// times its rest length shortened to it. Returns the springs shortened,
 /// and when the last pass found none to shorten, the room left: how much
 /// (m) any stretch spring may still lengthen before it reaches the limit
@@ -599,18 +604,21 @@ fn limit_stretch_with(
         // as their bits do (so the regions' minimum is the same in any
         // order, on any thread).
         let room = AtomicU32::new(f32::INFINITY.to_bits());
-        for p in (0..6).filter(|&p| stretch[p]) {
-            for (phase, work) in plan.phases.iter().zip(&plan.work) {
-                over += team_for(team, work[p]).sum_over(phase, |region| {
-                    // SAFETY: as in `sweep_with`: disjoint regions, borrowed buffers.
-                    let mut view = unsafe { shared.view(region.lanes.clone()) };
+        for (phase, work) in plan.phases.iter().zip(&plan.work) {
+            let springs = (0..6).filter(|&p| stretch[p]).map(|p| work[p]).sum();
+            over += team_for(team, springs).sum_over(phase, |region| {
+                // SAFETY: as in `sweep_with`: disjoint regions, borrowed buffers.
+                let mut view = unsafe { shared.view(region.lanes.clone()) };
+                let (mut over, mut least) = (0, f32::INFINITY);
+                for p in (0..6).filter(|&p| stretch[p]) {
                     let rest = &rest[p][region.lanes.clone()];
                     let runs = &region.runs[p];
-                    let (over, least) = limit_region(runs, rest, &mut view, factor, simd);
-                    room.fetch_min(least.to_bits(), Ordering::Relaxed);
-                    over
-                });
-            }
+                    let (o, l) = limit_region(runs, rest, &mut view, factor, simd);
+                    (over, least) = (over + o, least.min(l));
+                }
+                room.fetch_min(least.to_bits(), Ordering::Relaxed);
+                over
+            });
         }
         shortened += over;
         if over == 0 {
