@@ -754,6 +754,13 @@ const SURELY_WITHIN: f32 = 1.0 - 1.0e-5;
 /// given the motion of `b` relative to `a` since the substep's start, the
 /// inverse masses `w` of the ends, the rest length (0: no spring here) and
 /// the multiplier `lambda` so far this substep, which it updates.
+///
+/// With `d = b − a`, `l = |d|` and `D = (1 + γ)(w_a + w_b) + α`:
+/// `Δλ = −(l − L + αλ + γ d·m / l) / D`, and the ends move by `w Δλ d / l`.
+/// Both are written over `l² D`, which needs no root: `s = −(l (l − L + αλ)
+/// + γ d·m) / (l² D)`, `Δλ = s l`, moves `w s d`. The one division then
+/// runs beside the root instead of after it (a root, then two divisions
+/// one after the other, was the sweep's longest chain).
 #[inline(always)]
 fn project(
     a: [f32; 3],
@@ -768,21 +775,17 @@ fn project(
     let wsum = w[0] + w[1];
     // A missing spring, two pinned ends or coincident ends: no change.
     let active = rest > 0.0 && wsum > 0.0 && len2 > f32::MIN_POSITIVE;
-    let inv_len = if active { 1.0 / len2.sqrt() } else { 0.0 };
-    let n = [d[0] * inv_len, d[1] * inv_len, d[2] * inv_len];
-    let c = len2 * inv_len - rest;
-    let rate = n[0] * motion[0] + n[1] * motion[1] + n[2] * motion[2];
     let denom = (1.0 + k.gamma) * wsum + k.alpha;
-    let dl = if active {
-        -(c + k.alpha * *lambda + k.gamma * rate) / denom
-    } else {
-        0.0
-    };
-    *lambda += dl;
-    let (sa, sb) = (w[0] * dl, w[1] * dl);
+    let over = 1.0 / (len2 * denom);
+    let len = len2.sqrt();
+    let rate = d[0] * motion[0] + d[1] * motion[1] + d[2] * motion[2];
+    let num = len * (len - rest + k.alpha * *lambda) + k.gamma * rate;
+    let s = if active { -num * over } else { 0.0 };
+    *lambda += s * len;
+    let (sa, sb) = (w[0] * s, w[1] * s);
     (
-        [a[0] - n[0] * sa, a[1] - n[1] * sa, a[2] - n[2] * sa],
-        [b[0] + n[0] * sb, b[1] + n[1] * sb, b[2] + n[2] * sb],
+        [a[0] - d[0] * sa, a[1] - d[1] * sa, a[2] - d[2] * sa],
+        [b[0] + d[0] * sb, b[1] + d[1] * sb, b[2] + d[2] * sb],
     )
 }
 
