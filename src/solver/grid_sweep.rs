@@ -757,10 +757,11 @@ const SURELY_WITHIN: f32 = 1.0 - 1.0e-5;
 ///
 /// With `d = b − a`, `l = |d|` and `D = (1 + γ)(w_a + w_b) + α`:
 /// `Δλ = −(l − L + αλ + γ d·m / l) / D`, and the ends move by `w Δλ d / l`.
-/// Both are written over `l² D`, which needs no root: `s = −(l (l − L + αλ)
-/// + γ d·m) / (l² D)`, `Δλ = s l`, moves `w s d`. The one division then
-/// runs beside the root instead of after it (a root, then two divisions
-/// one after the other, was the sweep's longest chain).
+/// Both are written over `l² D`, which needs no root:
+/// `s = −(l (l − L + αλ) + γ d·m) / (l² D)`, `Δλ = s l`, moves `w s d`.
+/// The one division then runs beside the root instead of after it (a
+/// root, then two divisions one after the other, was the sweep's longest
+/// chain).
 #[inline(always)]
 fn project(
     a: [f32; 3],
