@@ -333,16 +333,20 @@ impl CollisionStage {
         let watched = strays == 0 && !self.tracks.cache_is_empty();
         let clear = !pinned_close && self.springs_clear_one_ball(drift2.sqrt(), thickness);
         let edges = options.edges && !clear;
+        // Whether the edge pass moved a particle: one that moved none left
+        // the cloth as the particle pass did.
+        let mut edges_moved = false;
         if edges {
             let team = options.team;
-            self.resolve_edges(particles, springs, obstacles, (thickness, team, watched));
+            edges_moved =
+                self.resolve_edges(particles, springs, obstacles, (thickness, team, watched));
         }
         // A spring lengthened by at most twice the farthest a particle was
         // moved here: with room for four times that (and a hair for
         // rounding), none reaches the limit, and the hold would shorten
         // nothing. At rest on a ball that is most substeps.
         let roomy = |room: f32| 4.0 * shift2.sqrt() + ROOM_EPSILON < room;
-        if edges || !options.stretch_room.is_some_and(roomy) {
+        if edges_moved || !options.stretch_room.is_some_and(roomy) {
             let limit = (options.stretch_limit, thickness, watched);
             self.hold_stretch_limit(particles, springs, obstacles, limit);
         }
@@ -351,14 +355,14 @@ impl CollisionStage {
 
     /// The edge pass: stretch and shear springs whose ends lie near an
     /// obstacle are kept out of it, then every particle it moved is pushed
-    /// back out of every obstacle.
+    /// back out of every obstacle. Returns whether it moved any particle.
     fn resolve_edges(
         &mut self,
         particles: &mut Particles,
         springs: &Springs,
         obstacles: &[Obstacle],
         (thickness, team, watched): (f32, Team, bool),
-    ) {
+    ) -> bool {
         // Which springs may cut an obstacle, by what the particle pass found
         // (which this pass does not change): the watched springs or all, on
         // threads, block by block; then those, in spring order, on one.
@@ -445,7 +449,9 @@ impl CollisionStage {
                 );
             }
         }
+        let any = !moved.is_empty();
         self.moved = moved;
+        any
     }
 
     /// Moves the point `x` out to the thickness of every obstacle it is
