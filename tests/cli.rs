@@ -544,10 +544,15 @@ fn the_sleep_flag_lets_a_settled_drape_sleep() {
     );
 }
 
-/// `--wind-speed 0` gives the flag the plain pressure law, under which it
-/// hangs nearer its pole (measured: its centroid 5.2 cm less far downwind,
-/// along +x; tests/flag.rs checks how the flying flag flies); bad wind
-/// values are refused.
+/// `--wind-speed 0` gives the flag the plain pressure law: another flight
+/// (tests/flag.rs checks how the flying flag flies); `--turbulence` at the
+/// scene's own value changes nothing; bad wind values are refused.
+///
+/// Not which flies farther: one frame's centroid of a fluttering flag
+/// swings by ±10 cm from frame to frame (measured at frames 180–300: the
+/// plain law's x from 0.53 to 0.75 m, the flying flag's 0.70 to 0.78 m),
+/// so a margin on it held for one build of the sweep and failed for the
+/// next.
 #[test]
 fn the_wind_flags_change_the_flags_wind() {
     let centroid = |extra: &[&str]| {
@@ -558,7 +563,7 @@ fn the_wind_flags_change_the_flags_wind() {
     };
     let (flying, plain) = (centroid(&[]), centroid(&["--wind-speed", "0"]));
     assert!(
-        flying[0] > plain[0] + 0.03,
+        (flying[0] - plain[0]).abs() > 1e-3 && plain.iter().all(|c| c.is_finite()),
         "centroid (x, y) {flying:?} flying, {plain:?} with the plain law"
     );
     assert_eq!(centroid(&["--turbulence", "0.4"]), flying);
