@@ -7,6 +7,7 @@ mod cloth_solver;
 mod explicit_euler;
 mod fast_mass_spring;
 mod filter;
+mod general_sweep;
 mod global_matrix;
 mod grid_sweep;
 mod implicit_euler;

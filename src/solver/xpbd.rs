@@ -19,11 +19,12 @@
 //! under a steady load ends where `k C` balances the load: the equilibrium
 //! of the force-based integrators.
 
-use crate::cloth::{Grid, SpringKind, Springs};
+use crate::cloth::{Grid, Springs};
 use crate::forces::{add_wind_forces, ForceModel};
 use crate::math::Vector;
 use crate::parallel::Disjoint;
 
+use super::general_sweep::{self, GeneralLanes};
 use super::grid_sweep::{limit_stretch, sweep, Compliance, GridPlan, Lanes};
 use super::strain_limit;
 use super::substep::Substep;
@@ -43,8 +44,10 @@ pub(crate) struct XpbdScratch {
     planned_for: Option<PlanKey>,
     /// Structure-of-arrays copies for the grid sweep.
     lanes: Lanes,
-    /// Per spring: its multiplier over the substep's sweeps (the generic sweep).
+    /// Per spring: its multiplier over the substep's sweeps (the general sweep).
     lambda: Vec<f32>,
+    /// Structure-of-arrays positions for the general sweep.
+    general: GeneralLanes,
 }
 
 /// What a grid plan depends on: the grid, and which springs (their storage,
@@ -169,10 +172,12 @@ pub(crate) fn step(
             ws.predicted.extend_from_slice(x);
             ws.lambda.clear();
             ws.lambda.resize(model.springs.len(), 0.0);
-            for _ in 0..sub.settings.xpbd_iterations {
-                sweep_colour_classes(sub, x, &ws.start, &mut ws.lambda, &compliance);
-            }
             let (springs, w) = (model.springs, model.inv_mass);
+            ws.general.load(x, &ws.start);
+            for _ in 0..sub.settings.xpbd_iterations {
+                general_sweep::sweep(springs, w, &mut ws.general, &mut ws.lambda, &compliance);
+            }
+            ws.general.store(x);
             strain_limit::limit_stretch(springs, w, x, None, model.stretch_limit);
             for i in 0..n {
                 let correction = x[i] - ws.predicted[i];
@@ -217,42 +222,5 @@ fn plan_lane(plan: &GridPlan, i: usize, band: &std::ops::Range<usize>) -> usize 
 fn correct_velocity(v: &mut Vector, correction: Vector, inv_mass: f32, h: f32) {
     if inv_mass != 0.0 {
         *v += correction / h;
-    }
-}
-
-/// One Gauss–Seidel sweep over any springs, colour class by colour class.
-fn sweep_colour_classes(
-    sub: &Substep,
-    x: &mut [Vector],
-    start: &[Vector],
-    lambda: &mut [f32],
-    compliance: &[Compliance; 3],
-) {
-    let model = &sub.model;
-    let springs = model.springs;
-    let (sa, sb, rest) = (&springs.a[..], &springs.b[..], &springs.rest[..]);
-    for kind in SpringKind::ALL {
-        let Compliance { alpha, gamma } = compliance[kind.index()];
-        for s in springs.range(kind) {
-            let (i, j) = (sa[s] as usize, sb[s] as usize);
-            let (wi, wj) = (model.inv_mass[i], model.inv_mass[j]);
-            let w = wi + wj;
-            if w == 0.0 {
-                continue;
-            }
-            let d = x[j] - x[i];
-            let len2 = d.length_squared();
-            if len2 <= f32::MIN_POSITIVE {
-                continue;
-            }
-            let inv_len = len2.sqrt().recip();
-            let dir = d * inv_len;
-            let c = len2 * inv_len - rest[s];
-            let rate = dir.dot((x[j] - start[j]) - (x[i] - start[i]));
-            let dl = -(c + alpha * lambda[s] + gamma * rate) / ((1.0 + gamma) * w + alpha);
-            lambda[s] += dl;
-            x[i] -= dir * (wi * dl);
-            x[j] += dir * (wj * dl);
-        }
     }
 }
