@@ -4,77 +4,71 @@
 //! and colour class by colour class (`Springs::from_list`).
 //!
 //! The springs of a colour class share no particle, so 8 of them are
-//! projected at once with AVX2 where the CPU has it: their ends' positions
-//! read one by one into registers (the processor's gather instruction was
-//! slower here than the scalar loop: 18 against 24 ns a spring, the loads
-//! one by one 8 ns, on this project's Xeon machines), the 8 projections in
-//! vector arithmetic, the ends written back one by one. Elsewhere, and for
-//! the few springs past a class's last full 8, one spring at a time. Both
-//! make the same IEEE operations in the same order for each spring (no
-//! fused multiply-add), so the same bits; a unit test compares them.
+//! projected at once with AVX2 where the CPU has it. Each particle is kept
+//! as four floats ([`GeneralLanes`]: position and an unused slot, start
+//! position and inverse mass), so a spring's ends are four 16-byte loads,
+//! turned into a register per coordinate by an 8 × 4 transpose, and two
+//! 16-byte stores. Elsewhere, and for the springs past a class's last full
+//! 8, one spring at a time. Both make the same IEEE operations in the same
+//! order for each spring (no fused multiply-add), so the same bits; a unit
+//! test compares them.
 //!
-//! Positions are kept as structure of arrays for the sweep
-//! ([`GeneralLanes`]): an 8-spring step reads whole `f32`s.
+//! Measured on the torn sheet (`tear`, one thread, `perf` samples of the
+//! sweep; Xeon machine of the eleventh session): one spring at a time over
+//! the cloth's 12-byte vectors 3.2 G; 8 at a time from separate x, y, z
+//! arrays, loaded one float at a time, 1.65 G; from the packed rows
+//! 0.93 G. The processor's gather instruction was slower than one float at
+//! a time (18 against 8 ns a spring in a stand-alone loop; 24 ns one spring
+//! at a time).
 
 use crate::cloth::{SpringKind, Springs};
 use crate::math::{simd_available, Vector};
 
 use super::grid_sweep::Compliance;
 
-/// The general sweep's positions (m) as structure of arrays: now (x, y, z)
-/// and at the substep's start (sx, sy, sz).
+/// The general sweep's particles, four floats each so that one 16-byte load
+/// reads a particle: positions (m) now (x, y, z, unused) and at the
+/// substep's start with the inverse mass (x, y, z in m, w in 1/kg).
 #[derive(Debug, Default)]
 pub(crate) struct GeneralLanes {
-    x: Vec<f32>,
-    y: Vec<f32>,
-    z: Vec<f32>,
-    sx: Vec<f32>,
-    sy: Vec<f32>,
-    sz: Vec<f32>,
+    now: Vec<[f32; 4]>,
+    start: Vec<[f32; 4]>,
 }
 
 impl GeneralLanes {
-    /// Copies the positions `x` and the substep's start `start` in.
-    pub fn load(&mut self, x: &[Vector], start: &[Vector]) {
-        for (dst, src, axis) in [
-            (&mut self.x, x, 0),
-            (&mut self.y, x, 1),
-            (&mut self.z, x, 2),
-            (&mut self.sx, start, 0),
-            (&mut self.sy, start, 1),
-            (&mut self.sz, start, 2),
-        ] {
-            dst.clear();
-            dst.extend(src.iter().map(|p| p[axis]));
-        }
+    /// Copies the positions `x`, the substep's start `start` and the
+    /// inverse masses `inv_mass` in.
+    pub fn load(&mut self, x: &[Vector], start: &[Vector], inv_mass: &[f32]) {
+        self.now.clear();
+        self.now.extend(x.iter().map(|p| [p.x, p.y, p.z, 0.0]));
+        self.start.clear();
+        let start = start.iter().zip(inv_mass);
+        self.start.extend(start.map(|(p, &w)| [p.x, p.y, p.z, w]));
     }
 
     /// Copies the positions back out to `x`.
     pub fn store(&self, x: &mut [Vector]) {
-        let xyz = self.x.iter().zip(&self.y).zip(&self.z);
-        for (p, ((&px, &py), &pz)) in x.iter_mut().zip(xyz) {
+        for (p, &[px, py, pz, _]) in x.iter_mut().zip(&self.now) {
             *p = Vector::new(px, py, pz);
         }
     }
 }
 
-/// One Gauss–Seidel sweep over `springs` (the particles' inverse masses
-/// `inv_mass`, 1/kg) on the positions `p`, with the multipliers `lambda`
-/// (one a spring, N·s², updated) and each kind's compliance terms.
+/// One Gauss–Seidel sweep over `springs` on the particles `p`, with the
+/// multipliers `lambda` (one a spring, N·s², updated) and each kind's
+/// compliance terms.
 pub(crate) fn sweep(
     springs: &Springs,
-    inv_mass: &[f32],
     p: &mut GeneralLanes,
     lambda: &mut [f32],
     compliance: &[Compliance; 3],
 ) {
-    sweep_with(springs, inv_mass, p, lambda, compliance, simd_available());
+    sweep_with(springs, p, lambda, compliance, simd_available());
 }
 
 /// [`sweep`], with the AVX2 steps only when `simd`.
 fn sweep_with(
     springs: &Springs,
-    inv_mass: &[f32],
     p: &mut GeneralLanes,
     lambda: &mut [f32],
     compliance: &[Compliance; 3],
@@ -84,7 +78,6 @@ fn sweep_with(
         a: &springs.a,
         b: &springs.b,
         rest: &springs.rest,
-        inv_mass,
     };
     let classes = springs.colour_ranges();
     if classes.is_empty() {
@@ -114,13 +107,11 @@ fn sweep_with(
     }
 }
 
-/// What the sweep reads of the springs (ends, rest lengths in m) and the
-/// particles (inverse masses, 1/kg).
+/// What the sweep reads of the springs: ends, rest lengths (m).
 struct Job<'a> {
     a: &'a [u32],
     b: &'a [u32],
     rest: &'a [f32],
-    inv_mass: &'a [f32],
 }
 
 impl Job<'_> {
@@ -131,12 +122,13 @@ impl Job<'_> {
     fn one(&self, s: usize, p: &mut GeneralLanes, lambda: &mut [f32], k: Compliance) {
         let Compliance { alpha, gamma } = k;
         let (i, j) = (self.a[s] as usize, self.b[s] as usize);
-        let (wi, wj) = (self.inv_mass[i], self.inv_mass[j]);
+        let ([xi, yi, zi, _], [xj, yj, zj, _]) = (p.now[i], p.now[j]);
+        let ([sxi, syi, szi, wi], [sxj, syj, szj, wj]) = (p.start[i], p.start[j]);
         let w = wi + wj;
         if w == 0.0 {
             return;
         }
-        let d = [p.x[j] - p.x[i], p.y[j] - p.y[i], p.z[j] - p.z[i]];
+        let d = [xj - xi, yj - yi, zj - zi];
         let len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         if len2 <= f32::MIN_POSITIVE {
             return;
@@ -145,16 +137,16 @@ impl Job<'_> {
         let n = [d[0] * inv_len, d[1] * inv_len, d[2] * inv_len];
         let c = len2 * inv_len - self.rest[s];
         let m = [
-            (p.x[j] - p.sx[j]) - (p.x[i] - p.sx[i]),
-            (p.y[j] - p.sy[j]) - (p.y[i] - p.sy[i]),
-            (p.z[j] - p.sz[j]) - (p.z[i] - p.sz[i]),
+            (xj - sxj) - (xi - sxi),
+            (yj - syj) - (yi - syi),
+            (zj - szj) - (zi - szi),
         ];
         let rate = n[0] * m[0] + n[1] * m[1] + n[2] * m[2];
         let dl = -(c + alpha * lambda[s] + gamma * rate) / ((1.0 + gamma) * w + alpha);
         lambda[s] += dl;
         let (si, sj) = (wi * dl, wj * dl);
-        (p.x[i], p.y[i], p.z[i]) = (p.x[i] - n[0] * si, p.y[i] - n[1] * si, p.z[i] - n[2] * si);
-        (p.x[j], p.y[j], p.z[j]) = (p.x[j] + n[0] * sj, p.y[j] + n[1] * sj, p.z[j] + n[2] * sj);
+        p.now[i] = [xi - n[0] * si, yi - n[1] * si, zi - n[2] * si, 0.0];
+        p.now[j] = [xj + n[0] * sj, yj + n[1] * sj, zj + n[2] * sj, 0.0];
     }
 
     /// The springs of `class`, 8 at a time, as long as 8 are left; returns
@@ -180,16 +172,12 @@ impl Job<'_> {
         while s + W <= class.end {
             let i: [usize; W] = std::array::from_fn(|c| self.a[s + c] as usize);
             let j: [usize; W] = std::array::from_fn(|c| self.b[s + c] as usize);
-            // One load per lane (the gather instruction was slower).
-            let at = |v: &[f32], e: &[usize; W]| {
-                let t: [f32; W] = std::array::from_fn(|c| v[e[c]]);
-                _mm256_loadu_ps(t.as_ptr())
-            };
-            let (xi, yi, zi) = (at(&p.x, &i), at(&p.y, &i), at(&p.z, &i));
-            let (xj, yj, zj) = (at(&p.x, &j), at(&p.y, &j), at(&p.z, &j));
-            let (sxi, syi, szi) = (at(&p.sx, &i), at(&p.sy, &i), at(&p.sz, &i));
-            let (sxj, syj, szj) = (at(&p.sx, &j), at(&p.sy, &j), at(&p.sz, &j));
-            let (wi, wj) = (at(self.inv_mass, &i), at(self.inv_mass, &j));
+            // One 16-byte load per particle and array (the gather
+            // instruction was slower), turned into a register per coordinate.
+            let [xi, yi, zi, _] = columns(&p.now, &i);
+            let [xj, yj, zj, _] = columns(&p.now, &j);
+            let [sxi, syi, szi, wi] = columns(&p.start, &i);
+            let [sxj, syj, szj, wj] = columns(&p.start, &j);
             let w = _mm256_add_ps(wi, wj);
             let (dx, dy, dz) = (
                 _mm256_sub_ps(xj, xi),
@@ -245,17 +233,63 @@ impl Job<'_> {
                 keep(yj, _mm256_add_ps(yj, _mm256_mul_ps(ny, sj))),
                 keep(zj, _mm256_add_ps(zj, _mm256_mul_ps(nz, sj))),
             ];
-            let mut out = [[0.0f32; W]; 6];
-            for (o, v) in out.iter_mut().zip(moved) {
-                _mm256_storeu_ps(o.as_mut_ptr(), v);
-            }
-            for c in 0..W {
-                (p.x[i[c]], p.y[i[c]], p.z[i[c]]) = (out[0][c], out[1][c], out[2][c]);
-                (p.x[j[c]], p.y[j[c]], p.z[j[c]]) = (out[3][c], out[4][c], out[5][c]);
-            }
+            rows(&mut p.now, &i, [moved[0], moved[1], moved[2], zero]);
+            rows(&mut p.now, &j, [moved[3], moved[4], moved[5], zero]);
             s += W;
         }
         s
+    }
+}
+
+/// The 4 columns of the rows `e` of `rows`, one register each (lane `c`
+/// from row `e[c]`): an 8 × 4 transpose.
+///
+/// # Safety
+/// The CPU has AVX2 (inlined into [`Job::eights_avx2`], which is compiled
+/// for it).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn columns(rows: &[[f32; 4]], e: &[usize; 8]) -> [std::arch::x86_64::__m256; 4] {
+    use std::arch::x86_64::*;
+    // Rows c and c + 4 in the two halves of register c.
+    let pair = |c: usize| {
+        let (lo, hi) = (&rows[e[c]], &rows[e[c + 4]]);
+        _mm256_setr_m128(_mm_loadu_ps(lo.as_ptr()), _mm_loadu_ps(hi.as_ptr()))
+    };
+    let (r0, r1, r2, r3) = (pair(0), pair(1), pair(2), pair(3));
+    let (t0, t1) = (_mm256_unpacklo_ps(r0, r1), _mm256_unpackhi_ps(r0, r1));
+    let (t2, t3) = (_mm256_unpacklo_ps(r2, r3), _mm256_unpackhi_ps(r2, r3));
+    [
+        _mm256_shuffle_ps::<0x44>(t0, t2),
+        _mm256_shuffle_ps::<0xEE>(t0, t2),
+        _mm256_shuffle_ps::<0x44>(t1, t3),
+        _mm256_shuffle_ps::<0xEE>(t1, t3),
+    ]
+}
+
+/// Writes the 4 columns `cols` (lane `c` to row `e[c]`) into `rows`: the
+/// inverse of [`columns`].
+///
+/// # Safety
+/// The CPU has AVX2 (inlined into [`Job::eights_avx2`], which is compiled
+/// for it).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn rows(rows: &mut [[f32; 4]], e: &[usize; 8], cols: [std::arch::x86_64::__m256; 4]) {
+    use std::arch::x86_64::*;
+    let [c0, c1, c2, c3] = cols;
+    let (t0, t1) = (_mm256_unpacklo_ps(c0, c1), _mm256_unpackhi_ps(c0, c1));
+    let (t2, t3) = (_mm256_unpacklo_ps(c2, c3), _mm256_unpackhi_ps(c2, c3));
+    // Register c holds rows c (low half) and c + 4 (high half).
+    let r = [
+        _mm256_shuffle_ps::<0x44>(t0, t2),
+        _mm256_shuffle_ps::<0xEE>(t0, t2),
+        _mm256_shuffle_ps::<0x44>(t1, t3),
+        _mm256_shuffle_ps::<0xEE>(t1, t3),
+    ];
+    for (c, r) in r.into_iter().enumerate() {
+        _mm_storeu_ps(rows[e[c]].as_mut_ptr(), _mm256_castps256_ps128(r));
+        _mm_storeu_ps(rows[e[c + 4]].as_mut_ptr(), _mm256_extractf128_ps::<1>(r));
     }
 }
 
@@ -266,7 +300,7 @@ mod tests {
 
     /// A 13 × 11 cloth (classes whose sizes are not multiples of 8), its
     /// particles shaken, a pinned corner, and the substep's start elsewhere.
-    fn setup() -> (Springs, Vec<f32>, GeneralLanes) {
+    fn setup() -> (Springs, GeneralLanes) {
         let cloth = ClothBuilder::new(13, 11).build().unwrap();
         let springs = cloth.springs().clone();
         let mut w = cloth.inverse_masses().to_vec();
@@ -286,17 +320,13 @@ mod tests {
             .map(|(i, p)| *p - Vector::new(0.0, shake(i, 3), 0.0))
             .collect();
         let mut lanes = GeneralLanes::default();
-        lanes.load(&x, &start);
-        (springs, w, lanes)
+        lanes.load(&x, &start, &w);
+        (springs, lanes)
     }
 
     fn bits(lanes: &GeneralLanes, lambda: &[f32]) -> Vec<u32> {
-        let all = [&lanes.x, &lanes.y, &lanes.z];
-        all.iter()
-            .flat_map(|v| v.iter())
-            .chain(lambda)
-            .map(|f| f.to_bits())
-            .collect()
+        let now = lanes.now.iter().flat_map(|p| &p[..3]);
+        now.chain(lambda).map(|f| f.to_bits()).collect()
     }
 
     #[test]
@@ -315,16 +345,16 @@ mod tests {
                 gamma: 0.0,
             },
         ];
-        let (springs, w, mut one) = setup();
-        let (_, _, mut eight) = setup();
+        let (springs, mut one) = setup();
+        let (_, mut eight) = setup();
         let (mut l1, mut l8) = (vec![0.0; springs.len()], vec![0.0; springs.len()]);
         for _ in 0..3 {
-            sweep_with(&springs, &w, &mut one, &mut l1, &k, false);
-            sweep_with(&springs, &w, &mut eight, &mut l8, &k, simd_available());
+            sweep_with(&springs, &mut one, &mut l1, &k, false);
+            sweep_with(&springs, &mut eight, &mut l8, &k, simd_available());
         }
         assert_eq!(bits(&one, &l1), bits(&eight, &l8));
         // The sweep did something: the springs pulled the shaken sheet.
-        let (_, _, untouched) = setup();
+        let (_, untouched) = setup();
         assert_ne!(bits(&one, &l1), bits(&untouched, &vec![0.0; springs.len()]));
         assert!(l1.iter().any(|&l| l != 0.0));
         // Every class of the cloth had 8 springs or more, so the AVX2 steps ran.

@@ -173,9 +173,9 @@ pub(crate) fn step(
             ws.lambda.clear();
             ws.lambda.resize(model.springs.len(), 0.0);
             let (springs, w) = (model.springs, model.inv_mass);
-            ws.general.load(x, &ws.start);
+            ws.general.load(x, &ws.start, w);
             for _ in 0..sub.settings.xpbd_iterations {
-                general_sweep::sweep(springs, w, &mut ws.general, &mut ws.lambda, &compliance);
+                general_sweep::sweep(springs, &mut ws.general, &mut ws.lambda, &compliance);
             }
             ws.general.store(x);
             strain_limit::limit_stretch(springs, w, x, None, model.stretch_limit);
