@@ -92,17 +92,22 @@ fn sweep_with(
     }
     for (class, &disjoint) in classes.iter().zip(&springs.colour_disjoint) {
         let k = compliance[springs.kind(class.start).index()];
-        let mut s = class.start;
+        // The springs left after the 8-spring steps.
         #[cfg(target_arch = "x86_64")]
-        if simd && disjoint {
+        let left = if simd && disjoint {
             // SAFETY: `simd` only when the CPU has AVX2; the class's springs
             // share no particle (`disjoint`).
-            s = unsafe { job.eights_avx2(class.clone(), p, lambda, k) };
-        }
-        let _ = (simd, disjoint);
-        while s < class.end {
+            unsafe { job.eights_avx2(class.clone(), p, lambda, k) }
+        } else {
+            class.start
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let left = {
+            let _ = (simd, disjoint);
+            class.start
+        };
+        for s in left..class.end {
             job.one(s, p, lambda, k);
-            s += 1;
         }
     }
 }
