@@ -5,7 +5,7 @@
 //!
 //! The springs of a colour class share no particle, so 8 of them are
 //! projected at once with AVX2 where the CPU has it. Each particle is kept
-//! as four floats ([`GeneralLanes`]: position and an unused slot, start
+//! as four floats ([`PackedParticles`]: position and an unused slot, start
 //! position and inverse mass), so a spring's ends are four 16-byte loads,
 //! turned into a register per coordinate by an 8 × 4 transpose, and two
 //! 16-byte stores. Elsewhere, and for the springs past a class's last full
@@ -30,12 +30,12 @@ use super::grid_sweep::Compliance;
 /// reads a particle: positions (m) now (x, y, z, unused) and at the
 /// substep's start with the inverse mass (x, y, z in m, w in 1/kg).
 #[derive(Debug, Default)]
-pub(crate) struct GeneralLanes {
+pub(crate) struct PackedParticles {
     now: Vec<[f32; 4]>,
     start: Vec<[f32; 4]>,
 }
 
-impl GeneralLanes {
+impl PackedParticles {
     /// Copies the positions `x`, the substep's start `start` and the
     /// inverse masses `inv_mass` in.
     pub fn load(&mut self, x: &[Vector], start: &[Vector], inv_mass: &[f32]) {
@@ -59,7 +59,7 @@ impl GeneralLanes {
 /// compliance terms.
 pub(crate) fn sweep(
     springs: &Springs,
-    p: &mut GeneralLanes,
+    p: &mut PackedParticles,
     lambda: &mut [f32],
     compliance: &[Compliance; 3],
 ) {
@@ -69,7 +69,7 @@ pub(crate) fn sweep(
 /// [`sweep`], with the AVX2 steps only when `simd`.
 fn sweep_with(
     springs: &Springs,
-    p: &mut GeneralLanes,
+    p: &mut PackedParticles,
     lambda: &mut [f32],
     compliance: &[Compliance; 3],
     simd: bool,
@@ -124,7 +124,7 @@ impl Job<'_> {
     /// / ((1 + γ)(w_i + w_j) + α)`, the ends moved by `∓w Δλ n`; no change
     /// for two pinned ends or coincident ends.
     #[inline(always)]
-    fn one(&self, s: usize, p: &mut GeneralLanes, lambda: &mut [f32], k: Compliance) {
+    fn one(&self, s: usize, p: &mut PackedParticles, lambda: &mut [f32], k: Compliance) {
         let Compliance { alpha, gamma } = k;
         let (i, j) = (self.a[s] as usize, self.b[s] as usize);
         let ([xi, yi, zi, _], [xj, yj, zj, _]) = (p.now[i], p.now[j]);
@@ -164,7 +164,7 @@ impl Job<'_> {
     unsafe fn eights_avx2(
         &self,
         class: std::ops::Range<usize>,
-        p: &mut GeneralLanes,
+        p: &mut PackedParticles,
         lambda: &mut [f32],
         k: Compliance,
     ) -> usize {
@@ -304,12 +304,13 @@ mod tests {
     use crate::cloth::ClothBuilder;
 
     /// A 13 × 11 cloth (classes whose sizes are not multiples of 8), its
-    /// particles shaken, a pinned corner, and the substep's start elsewhere.
-    fn setup() -> (Springs, GeneralLanes) {
+    /// particles shaken, two pinned particles with a spring between them
+    /// (no change there), and the substep's start elsewhere.
+    fn setup() -> (Springs, PackedParticles) {
         let cloth = ClothBuilder::new(13, 11).build().unwrap();
         let springs = cloth.springs().clone();
         let mut w = cloth.inverse_masses().to_vec();
-        w[0] = 0.0;
+        (w[0], w[1]) = (0.0, 0.0);
         let shake = |i: usize, k: u32| {
             ((i as u32).wrapping_mul(2654435761).rotate_left(k) % 1000) as f32 * 1e-5
         };
@@ -324,13 +325,14 @@ mod tests {
             .enumerate()
             .map(|(i, p)| *p - Vector::new(0.0, shake(i, 3), 0.0))
             .collect();
-        let mut lanes = GeneralLanes::default();
-        lanes.load(&x, &start, &w);
-        (springs, lanes)
+        let mut packed = PackedParticles::default();
+        packed.load(&x, &start, &w);
+        (springs, packed)
     }
 
-    fn bits(lanes: &GeneralLanes, lambda: &[f32]) -> Vec<u32> {
-        let now = lanes.now.iter().flat_map(|p| &p[..3]);
+    /// The positions and multipliers, bit for bit.
+    fn bits(packed: &PackedParticles, lambda: &[f32]) -> Vec<u32> {
+        let now = packed.now.iter().flat_map(|p| &p[..3]);
         now.chain(lambda).map(|f| f.to_bits()).collect()
     }
 

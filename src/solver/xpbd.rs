@@ -24,7 +24,7 @@ use crate::forces::{add_wind_forces, ForceModel};
 use crate::math::Vector;
 use crate::parallel::Disjoint;
 
-use super::general_sweep::{self, GeneralLanes};
+use super::general_sweep::{self, PackedParticles};
 use super::grid_sweep::{limit_stretch, sweep, Compliance, GridPlan, Lanes};
 use super::strain_limit;
 use super::substep::Substep;
@@ -46,8 +46,8 @@ pub(crate) struct XpbdScratch {
     lanes: Lanes,
     /// Per spring: its multiplier over the substep's sweeps (the general sweep).
     lambda: Vec<f32>,
-    /// Structure-of-arrays positions for the general sweep.
-    general: GeneralLanes,
+    /// The particles packed for the general sweep (`general_sweep.rs`).
+    general: PackedParticles,
 }
 
 /// What a grid plan depends on: the grid, and which springs (their storage,
