@@ -32,8 +32,6 @@ use super::substep::Substep;
 /// Scratch of the small-steps solver.
 #[derive(Debug, Default)]
 pub(crate) struct XpbdScratch {
-    /// Positions at the start of the substep.
-    start: Vec<Vector>,
     /// Positions after the prediction, before the sweeps (the general sweep).
     predicted: Vec<Vector>,
     /// Wind forces (N).
@@ -162,8 +160,8 @@ pub(crate) fn step(
             room
         }
         _ => {
-            ws.start.clear();
-            ws.start.extend_from_slice(x);
+            let (springs, w) = (model.springs, model.inv_mass);
+            ws.general.load_start(x, w);
             for i in 0..n {
                 let (xi, vi) = (&mut x[i], &mut v[i]);
                 predict(model, wind, i, (xi, vi), h);
@@ -172,8 +170,7 @@ pub(crate) fn step(
             ws.predicted.extend_from_slice(x);
             ws.lambda.clear();
             ws.lambda.resize(model.springs.len(), 0.0);
-            let (springs, w) = (model.springs, model.inv_mass);
-            ws.general.load(x, &ws.start, w);
+            ws.general.load_now(x);
             for _ in 0..sub.settings.xpbd_iterations {
                 general_sweep::sweep(springs, &mut ws.general, &mut ws.lambda, &compliance);
             }
