@@ -5,12 +5,14 @@
 //!
 //! Found ahead, solved every substep (as the obstacles are): a spatial
 //! hash of the particles ([`SpatialHash`]) gives each triangle the
-//! particles within reach of it, `thickness + margin`, where the margin
-//! covers how far particles move relative to each other until the next
-//! look. A look costs a pass over the triangles, so it is taken every few
-//! substeps, as many as keep that relative motion under the collision
-//! thickness (every substep only for a cloth in violent motion, once a
-//! step at rest); the triangles of quiet patches ([`Patches`]: a bent
+//! particles within reach of it, `thickness + margin`. A look costs a pass
+//! over the triangles, so it is taken again only when it may have missed
+//! a pair: at the first substep of a step, and whenever some particle has
+//! moved more than half the margin since the last look, relative to the
+//! particles' mean motion (two particles then cannot have closed in by
+//! more than the margin: a neighbour list with a skin, as in molecular
+//! dynamics). Every substep for a cloth in violent motion, once a step at
+//! rest or in free fall; the triangles of quiet patches ([`Patches`]: a bent
 //! sheet that cannot touch itself) are skipped. Each pair keeps the side
 //! of the triangle the particle was on when found. The cloth's border
 //! edges are also paired with the other edges near them, so that two
@@ -75,9 +77,11 @@ pub struct SelfContacts {
     pairs: Vec<SelfPair>,
     /// Border edges near other edges, found by the last look.
     edge_pairs: Vec<EdgePair>,
-    /// Substeps between looks in this step.
-    interval: u32,
-    /// How far (m) particles may move relative to each other between looks.
+    /// Positions (m) at the last look, in this step.
+    at_look: Vec<Vector>,
+    /// Whether this step has looked yet.
+    looked: bool,
+    /// How far (m) particles may close in on each other between looks.
     margin: f32,
 }
 
@@ -255,45 +259,29 @@ pub(crate) struct SelfContactParams {
 }
 
 impl SelfContacts {
-    /// At the start of a step of `substeps` substeps of `h` seconds: how
-    /// often to look, from how fast particles move relative to the mean,
-    /// so that they move at most about `travel` metres (the collision
-    /// thickness) relative to each other between looks.
-    pub(crate) fn begin_step(
-        &mut self,
-        p: &Particles,
-        topology: &Topology,
-        (h, substeps): (f32, u32),
-        travel: f32,
-    ) {
-        self.neighbours.update(topology, p.x.len());
-        let n = p.v.len().max(1) as f32;
-        let mean = p.v.iter().copied().fold(Vector::ZERO, |s, v| s + v) / n;
-        let fastest =
-            p.v.iter()
-                .map(|&v| (v - mean).length_squared())
-                .fold(0.0f32, f32::max)
-                .sqrt();
-        // Two particles may close in on each other at twice the fastest speed.
-        let closing = 2.0 * fastest * h;
-        let target = travel.max(1.0e-4);
-        self.interval = if closing > 0.0 && closing.is_finite() {
-            ((target / closing).floor() as u32).clamp(1, substeps.max(1))
-        } else {
-            substeps.max(1)
-        };
-        self.margin = if closing.is_finite() {
-            // Twice: the speeds are those of the step's start, and a
-            // swinging skirt gains speed within the step.
-            2.0 * closing * self.interval as f32
-        } else {
-            0.0
-        };
+    /// At the start of a step: the next substep looks afresh, and looks
+    /// reach `margin` metres beyond the thickness.
+    pub(crate) fn begin_step(&mut self, topology: &Topology, n: usize, margin: f32) {
+        self.neighbours.update(topology, n);
+        self.margin = margin.max(1.0e-4);
+        self.looked = false;
     }
 
-    /// True when `substep` of this step looks for pairs afresh.
-    pub(crate) fn due(&self, substep: u32) -> bool {
-        substep.is_multiple_of(self.interval.max(1))
+    /// True when particles at `x` may have closed in on each other by more
+    /// than the margin since the last look (or this step has not looked):
+    /// some particle moved more than half of it relative to the mean motion.
+    pub(crate) fn due(&self, x: &[Vector]) -> bool {
+        if !self.looked || self.at_look.len() != x.len() {
+            return true;
+        }
+        let n = x.len().max(1) as f32;
+        let moved = x.iter().zip(&self.at_look).map(|(&x, &at)| x - at);
+        let mean = moved.clone().fold(Vector::ZERO, |s, d| s + d) / n;
+        let half = 0.5 * self.margin;
+        // Also true for a motion that is not a number: look again.
+        moved
+            .into_iter()
+            .any(|d| !((d - mean).length_squared() <= half * half))
     }
 
     /// Finds the particles within reach of triangles they are not
@@ -303,6 +291,9 @@ impl SelfContacts {
     pub(crate) fn find(&mut self, x: &[Vector], topology: &Topology, thickness: f32, team: Team) {
         self.pairs.clear();
         self.edge_pairs.clear();
+        self.at_look.resize(x.len(), Vector::ZERO);
+        self.at_look.copy_from_slice(x);
+        self.looked = true;
         let triangles = &topology.triangles;
         if triangles.is_empty() {
             return;
@@ -540,4 +531,37 @@ pub(crate) fn barycentric(q: Vector, e1: Vector, e2: Vector) -> [f32; 3] {
     let vb = (d22 * dq1 - d12 * dq2) / denom;
     let w = (d11 * dq2 - d12 * dq1) / denom;
     [1.0 - vb - w, vb, w]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloth::ClothBuilder;
+
+    #[test]
+    fn a_look_is_due_once_a_particle_moved_half_the_margin_relative_to_the_rest() {
+        let cloth = ClothBuilder::new(4, 4).build().unwrap();
+        let topology = &*cloth.topology;
+        let x = cloth.positions().to_vec();
+        let mut contacts = SelfContacts::default();
+        contacts.begin_step(topology, x.len(), 0.01);
+        assert!(contacts.due(&x), "a step's first substep looks");
+        contacts.find(&x, topology, 0.002, Team::ALONE);
+        assert!(!contacts.due(&x));
+        // The whole cloth falling: no two particles closed in.
+        let fell: Vec<Vector> = x.iter().map(|&p| p - Vector::Y * 0.3).collect();
+        assert!(!contacts.due(&fell));
+        // One particle of 16 moved 15/16 of its motion relative to the mean.
+        let moved = |dy: f32| {
+            let mut y = x.clone();
+            y[5].y += dy;
+            y
+        };
+        assert!(!contacts.due(&moved(0.0053)), "4.97 mm relative");
+        assert!(contacts.due(&moved(0.0054)), "5.06 mm relative");
+        assert!(contacts.due(&moved(f32::NAN)), "lost: look again");
+        // Every step looks afresh at its first substep.
+        contacts.begin_step(topology, x.len(), 0.01);
+        assert!(contacts.due(&x));
+    }
 }
