@@ -63,6 +63,10 @@ pub struct CollisionStage {
     /// The particles the edge pass moved, or the stretch limit in a round
     /// (`stretch_hold.rs`), each once: those `edge_moved` marks.
     pub(super) moved: Vec<u32>,
+    /// Per particle: moved by the stretch limit's last round, listed in
+    /// `held_before` (`stretch_hold.rs`).
+    pub(super) held_moved: Vec<bool>,
+    pub(super) held_before: Vec<u32>,
     /// Per block of the particle pass: its scratch.
     blocks: Vec<BlockScratch>,
     /// Per block of [`EDGE_BLOCK`] springs: those the edge pass must look at.
@@ -100,6 +104,9 @@ impl CollisionStage {
         self.edge_moved.resize(particles, false);
         self.moved.clear();
         self.moved.reserve(particles);
+        self.held_moved.resize(particles, false);
+        self.held_before.clear();
+        self.held_before.reserve(particles);
         self.contacts.begin_step(particles, obstacles.len());
         self.longest_edge = f32::INFINITY;
     }
