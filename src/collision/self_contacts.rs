@@ -278,10 +278,11 @@ impl SelfContacts {
         let moved = x.iter().zip(&self.at_look).map(|(&x, &at)| x - at);
         let mean = moved.clone().fold(Vector::ZERO, |s, d| s + d) / n;
         let half = 0.5 * self.margin;
-        // Also true for a motion that is not a number: look again.
-        moved
-            .into_iter()
-            .any(|d| !((d - mean).length_squared() <= half * half))
+        moved.into_iter().any(|d| {
+            let r2 = (d - mean).length_squared();
+            // A motion that is not a number: look again.
+            r2 > half * half || r2.is_nan()
+        })
     }
 
     /// Finds the particles within reach of triangles they are not
