@@ -63,9 +63,10 @@ pub struct CollisionStage {
     /// The particles the edge pass moved, or the stretch limit in a round
     /// (`stretch_hold.rs`), each once: those `edge_moved` marks.
     pub(super) moved: Vec<u32>,
-    /// Per particle: moved by the stretch limit's last round, listed in
-    /// `held_before` (`stretch_hold.rs`).
+    /// Per particle: moved by the stretch hold's last round
+    /// (`stretch_hold.rs`), listed in `held_before`.
     pub(super) held_moved: Vec<bool>,
+    /// The particles `held_moved` marks, each once.
     pub(super) held_before: Vec<u32>,
     /// Per block of the particle pass: its scratch.
     blocks: Vec<BlockScratch>,
