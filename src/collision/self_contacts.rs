@@ -77,10 +77,8 @@ pub struct SelfContacts {
     pairs: Vec<SelfPair>,
     /// Border edges near other edges, found by the last look.
     edge_pairs: Vec<EdgePair>,
-    /// Positions (m) at the last look, in this step.
+    /// Positions (m) at the last look, in this step (none before it).
     at_look: Vec<Vector>,
-    /// Whether this step has looked yet.
-    looked: bool,
     /// How far (m) particles may close in on each other between looks.
     margin: f32,
 }
@@ -264,14 +262,14 @@ impl SelfContacts {
     pub(crate) fn begin_step(&mut self, topology: &Topology, n: usize, margin: f32) {
         self.neighbours.update(topology, n);
         self.margin = margin.max(1.0e-4);
-        self.looked = false;
+        self.at_look.clear();
     }
 
     /// True when particles at `x` may have closed in on each other by more
     /// than the margin since the last look (or this step has not looked):
     /// some particle moved more than half of it relative to the mean motion.
     pub(crate) fn due(&self, x: &[Vector]) -> bool {
-        if !self.looked || self.at_look.len() != x.len() {
+        if self.at_look.len() != x.len() {
             return true;
         }
         let n = x.len().max(1) as f32;
@@ -294,7 +292,6 @@ impl SelfContacts {
         self.edge_pairs.clear();
         self.at_look.resize(x.len(), Vector::ZERO);
         self.at_look.copy_from_slice(x);
-        self.looked = true;
         let triangles = &topology.triangles;
         if triangles.is_empty() {
             return;

@@ -100,10 +100,7 @@ impl CollisionStage {
                 shortened += 1;
             }
             // The last round's marks give way to this one's.
-            for &i in &self.held_before {
-                self.held_moved[i as usize] = false;
-            }
-            self.held_before.clear();
+            self.forget_held();
             if self.moved.is_empty() {
                 break;
             }
@@ -116,14 +113,20 @@ impl CollisionStage {
                 let (x, v) = (&mut particles.x[i], &mut particles.v[i]);
                 self.move_out(x, Some(v), obstacles, thickness);
             }
-            self.held_before.extend_from_slice(&held);
-            self.moved = held;
+            // This round's list becomes the last round's; the emptied one
+            // collects the next.
+            self.moved = std::mem::replace(&mut self.held_before, held);
         }
+        self.forget_held();
+        shortened
+    }
+
+    /// Clears the marks of the particles the stretch hold's last round moved.
+    fn forget_held(&mut self) {
         for &i in &self.held_before {
             self.held_moved[i as usize] = false;
         }
         self.held_before.clear();
-        shortened
     }
 }
 
