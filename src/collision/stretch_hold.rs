@@ -22,6 +22,13 @@ use crate::math::Vector;
 /// near an obstacle is over the limit.
 const ROUNDS: usize = 4;
 
+/// How far over its limit, as a share of it, a spring may be and count as
+/// within it, in every stretch limit (this hold, the solvers' limit after
+/// a substep and the grid's): a spring shortened to its limit measures a
+/// few parts in 10⁷ either side of it, and without a slack the passes
+/// would chase the rounding.
+pub(crate) const LIMIT_SLACK: f32 = 1.0e-4;
+
 impl CollisionStage {
     /// Shortens to `factor` times their rest length the stretch `springs`
     /// with an end near an obstacle (the watched ones, when `watched`), each
@@ -80,8 +87,10 @@ impl CollisionStage {
                 let d = x[b] - x[a];
                 let limit = springs.rest[s] * factor;
                 let len2 = d.length_squared();
-                // Also false for a length that is not a number.
-                let over = len2 > limit * limit;
+                // Over by more than the slack every limit allows (also
+                // false for a length that is not a number).
+                let slack = limit * (1.0 + LIMIT_SLACK);
+                let over = len2 > slack * slack;
                 if !over || w == 0.0 {
                     continue;
                 }

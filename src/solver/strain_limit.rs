@@ -14,7 +14,7 @@
 //! 30% and limited to 5% ended with a spring at 53%).
 
 use crate::cloth::{SpringKind, Springs};
-use crate::collision::stop_separating;
+use crate::collision::{stop_separating, LIMIT_SLACK};
 use crate::math::Vector;
 
 /// Gauss–Seidel passes at most; they stop as soon as none is over the limit.
@@ -44,8 +44,9 @@ pub(crate) fn limit_stretch(
             let w = inv_mass[i] + inv_mass[j];
             let d = x[j] - x[i];
             let len = d.length();
-            let excess = len - rest[s] * factor;
-            if excess.is_nan() || excess <= 0.0 || w == 0.0 {
+            let limit = rest[s] * factor;
+            let excess = len - limit;
+            if excess.is_nan() || excess <= limit * LIMIT_SLACK || w == 0.0 {
                 continue;
             }
             let step = d * (excess / (w * len));
