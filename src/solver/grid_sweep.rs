@@ -133,10 +133,8 @@ pub(crate) struct GridPlan {
     rest: Staggered,
     /// The longest rest length of a stretch spring (m).
     longest_stretch: f32,
-    /// Lanes in a row (a row's lanes are its particles, reordered).
-    cols: usize,
-    /// Per row: the last pass of the stretch limit that moved one of its
-    /// particles (0: none yet this call).
+    /// Per lane: the last pass of the stretch limit that moved it (0: none
+    /// yet this call).
     limit_moved: Vec<u32>,
 }
 
@@ -358,8 +356,7 @@ impl GridPlan {
             lambda: Staggered::new(6, n, LAMBDA_SLOT),
             rest,
             longest_stretch,
-            cols,
-            limit_moved: vec![0; rows],
+            limit_moved: vec![0; n],
         })
     }
 
@@ -588,11 +585,11 @@ fn sweep_region(job: &RegionSweep, view: &mut View, lambda: &mut [f32]) {
 /// may still lengthen before it reaches the limit (the collision stage then
 /// knows which springs it need not hold).
 ///
-/// After the first pass, a pass looks only at the runs with a row that the
-/// pass before or this one moved: the others were found within the limit
-/// and have not changed since, so the bits are those of whole passes (a
-/// landing needs dozens of passes to carry a correction across the cloth,
-/// and then only a few rows still move). When such a pass shortens
+/// After the first pass, a pass looks only at the springs with an end that
+/// the pass before or this one moved (eight lanes at a time): the others
+/// were found within the limit and have not changed since, so the bits are
+/// those of whole passes (a landing needs dozens of passes to carry a
+/// correction across the cloth, and then only some springs still move). When such a pass shortens
 /// nothing, the room is 0: the pass before shortened a spring to its limit.
 pub(crate) fn limit_stretch(
     plan: &mut GridPlan,
@@ -604,10 +601,13 @@ pub(crate) fn limit_stretch(
 }
 
 /// Gauss–Seidel passes of the grid's stretch limit at most; they stop as
-/// soon as one shortens nothing. Many, because after the first few a pass
-/// visits only the rows still moving: at half the substeps the drape's
-/// landing needed 64 to stay under 5% at N = 64 (16 left it at 5.0%).
-pub(crate) const LIMIT_PASSES: u32 = 64;
+/// soon as one shortens nothing, and after the first a pass looks only at
+/// the springs still moving. The drape's landing stays under 5% with 16 at
+/// the automatic substeps (N = 64 to 256). Where the whole cloth hangs at
+/// its limit every pass is a whole one: the `hammock`'s cotton rests 5.21%
+/// stretched with 16 (7.3 ms a frame), 4.75% with 32 (9.9 ms), 4.53% with
+/// 64 (15 ms; BENCHMARKS.md, thirteenth session).
+pub(crate) const LIMIT_PASSES: u32 = 16;
 
 /// [`limit_stretch`], with the AVX2 kernel only when `simd`.
 fn limit_stretch_with(
@@ -620,7 +620,6 @@ fn limit_stretch_with(
     if !factor.is_finite() {
         return (0, None);
     }
-    let cols = plan.cols;
     plan.limit_moved.fill(0);
     let moved = Disjoint::new(&mut plan.limit_moved[..]);
     let shared = SharedLanes::new(lanes, &mut plan.lambda);
@@ -632,39 +631,30 @@ fn limit_stretch_with(
     // looked at (limit² - length², m², as bits: never negative, and
     // non-negative floats order as their bits do, so the regions' minimum
     // is the same in any order, on any thread). The first looks at every
-    // run; the others skip runs whose rows are unmoved since the pass before.
+    // spring; the others skip those whose lanes are unmoved since the pass before.
     let pass = |number: u32| -> (u32, f32) {
         let room = AtomicU32::new(f32::INFINITY.to_bits());
         let mut over = 0;
         for (phase, work) in phases.iter().zip(work) {
             let springs = (0..6).filter(|&p| stretch[p]).map(|p| work[p]).sum();
             over += team_for(team, springs).sum_over(phase, |region| {
-                // SAFETY: as in `sweep_with`: disjoint regions, borrowed
-                // buffers; a region's rows are its lanes' (whole rows).
+                // SAFETY: as in `sweep_with`: disjoint regions, borrowed buffers.
                 let (mut view, moved) = unsafe {
                     (
                         shared.view(region.lanes.clone()),
-                        moved.range(region.lanes.start / cols..region.lanes.end / cols),
+                        moved.range(region.lanes.clone()),
                     )
                 };
                 let (mut over, mut least) = (0, f32::INFINITY);
+                let mut marks = LimitMarks {
+                    moved,
+                    pass: number,
+                };
                 for p in (0..6).filter(|&p| stretch[p]) {
                     let rest = &rest[p][region.lanes.clone()];
-                    for seg in &region.runs[p] {
-                        let rows = [seg.a as usize / cols, seg.b as usize / cols];
-                        let stale = |r: usize| moved[r] + 1 >= number;
-                        if number > 1 && !rows.into_iter().any(stale) {
-                            continue;
-                        }
-                        let runs = std::slice::from_ref(seg);
-                        let (o, l) = limit_region(runs, rest, &mut view, factor, simd);
-                        if o > 0 {
-                            for r in rows {
-                                moved[r] = number;
-                            }
-                        }
-                        (over, least) = (over + o, least.min(l));
-                    }
+                    let runs = &region.runs[p];
+                    let (o, l) = limit_region(runs, rest, &mut view, factor, (&mut marks, simd));
+                    (over, least) = (over + o, least.min(l));
                 }
                 room.fetch_min(least.to_bits(), Ordering::Relaxed);
                 over
@@ -698,15 +688,15 @@ fn limit_region(
     rest: &[f32],
     lanes: &mut View,
     factor: f32,
-    simd: bool,
+    (marks, simd): (&mut LimitMarks, bool),
 ) -> (u32, f32) {
     #[cfg(target_arch = "x86_64")]
     if simd {
         // SAFETY: `simd` only when the CPU has AVX2.
-        return unsafe { limit_runs_avx2(runs, rest, lanes, factor) };
+        return unsafe { limit_runs_avx2(runs, rest, lanes, factor, marks) };
     }
     let _ = simd;
-    limit_runs(runs, rest, lanes, factor)
+    limit_runs(runs, rest, lanes, factor, marks)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -716,14 +706,53 @@ unsafe fn limit_runs_avx2(
     rest: &[f32],
     lanes: &mut View,
     factor: f32,
+    marks: &mut LimitMarks,
 ) -> (u32, f32) {
-    limit_runs(runs, rest, lanes, factor)
+    limit_runs(runs, rest, lanes, factor, marks)
 }
 
-/// The stretch limit on some runs' springs; returns how many it shortened,
-/// and the least room left below the limit (m², in squares of lengths).
+/// Which lanes of a region a pass of the stretch limit moved: per lane the
+/// last pass that moved it (0: none this call), and this pass's number
+/// (from 1).
+struct LimitMarks<'a> {
+    moved: &'a mut [u32],
+    pass: u32,
+}
+
+impl LimitMarks<'_> {
+    /// Whether the `M` springs from lanes `a..` to lanes `b..` need a
+    /// look: always in the first pass; after it, when an end moved in the
+    /// pass before or this one (the others were found within the limit
+    /// then and have not changed).
+    #[inline(always)]
+    fn due<const M: usize>(&self, (a, b): (usize, usize)) -> bool {
+        let recent = |l: &u32| *l + 1 >= self.pass;
+        self.pass == 1
+            || self.moved[a..a + M].iter().any(recent)
+            || self.moved[b..b + M].iter().any(recent)
+    }
+
+    /// The ends of the `M` springs from lanes `a..` to lanes `b..` moved
+    /// (all of them marked when any did: a spring looked at again for
+    /// nothing gives the same bits).
+    #[inline(always)]
+    fn mark<const M: usize>(&mut self, (a, b): (usize, usize)) {
+        self.moved[a..a + M].fill(self.pass);
+        self.moved[b..b + M].fill(self.pass);
+    }
+}
+
+/// The stretch limit on some runs' springs, those `marks` says are due;
+/// returns how many it shortened, and the least room left below the limit
+/// among those it looked at (m², in squares of lengths).
 #[inline(always)]
-fn limit_runs(runs: &[Segment], rest: &[f32], lanes: &mut View, factor: f32) -> (u32, f32) {
+fn limit_runs(
+    runs: &[Segment],
+    rest: &[f32],
+    lanes: &mut View,
+    factor: f32,
+    marks: &mut LimitMarks,
+) -> (u32, f32) {
     let (mut over, mut room) = (0, f32::INFINITY);
     for seg in runs {
         let (a, b, len) = (seg.a as usize, seg.b as usize, seg.len as usize);
@@ -731,13 +760,25 @@ fn limit_runs(runs: &[Segment], rest: &[f32], lanes: &mut View, factor: f32) -> 
         // A run's springs share no particle: `WIDTH` of them at once give
         // the bits of one at a time.
         while done + WIDTH <= len {
-            let (o, r) = limit_chunk::<WIDTH>((a + done, b + done), rest, lanes, factor);
-            (over, room) = (over + o, room.min(r));
+            let ends = (a + done, b + done);
+            if marks.due::<WIDTH>(ends) {
+                let (o, r) = limit_chunk::<WIDTH>(ends, rest, lanes, factor);
+                if o > 0 {
+                    marks.mark::<WIDTH>(ends);
+                }
+                (over, room) = (over + o, room.min(r));
+            }
             done += WIDTH;
         }
         while done < len {
-            let (o, r) = limit_chunk::<1>((a + done, b + done), rest, lanes, factor);
-            (over, room) = (over + o, room.min(r));
+            let ends = (a + done, b + done);
+            if marks.due::<1>(ends) {
+                let (o, r) = limit_chunk::<1>(ends, rest, lanes, factor);
+                if o > 0 {
+                    marks.mark::<1>(ends);
+                }
+                (over, room) = (over + o, room.min(r));
+            }
             done += 1;
         }
     }
