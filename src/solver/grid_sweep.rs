@@ -578,8 +578,7 @@ fn sweep_region(job: &RegionSweep, view: &mut View, lambda: &mut [f32]) {
 /// The material's stretch limit on a grid cloth: the stretch springs'
 /// runs, up to [`LIMIT_PASSES`] Gauss–Seidel passes (the bands, then the
 /// boundaries, each region's families in turn), each spring longer than
-/// `factor` times its rest length (by more than
-/// [`LIMIT_SLACK`] of it)
+/// `factor` times its rest length (by more than [`LIMIT_SLACK`] of it)
 /// shortened to it. Returns the springs shortened, and when the last pass
 /// found none to shorten, the room left: how much (m) any stretch spring
 /// may still lengthen before it reaches the limit (the collision stage then
@@ -589,8 +588,9 @@ fn sweep_region(job: &RegionSweep, view: &mut View, lambda: &mut [f32]) {
 /// the pass before or this one moved (eight lanes at a time): the others
 /// were found within the limit and have not changed since, so the bits are
 /// those of whole passes (a landing needs dozens of passes to carry a
-/// correction across the cloth, and then only some springs still move). When such a pass shortens
-/// nothing, the room is 0: the pass before shortened a spring to its limit.
+/// correction across the cloth, and then only some springs still move).
+/// When such a pass shortens nothing, the room is 0: the pass before
+/// shortened a spring to its limit.
 pub(crate) fn limit_stretch(
     plan: &mut GridPlan,
     lanes: &mut Lanes,
@@ -732,13 +732,27 @@ impl LimitMarks<'_> {
             || self.moved[b..b + M].iter().any(recent)
     }
 
-    /// The ends of the `M` springs from lanes `a..` to lanes `b..` moved
-    /// (all of them marked when any did: a spring looked at again for
-    /// nothing gives the same bits).
+    /// [`limit_chunk`] on the `M` springs from lanes `a..` to lanes `b..`
+    /// when they are due (else nothing shortened, no room measured),
+    /// marking all their ends when it shortened any (a spring looked at
+    /// again for nothing gives the same bits).
     #[inline(always)]
-    fn mark<const M: usize>(&mut self, (a, b): (usize, usize)) {
-        self.moved[a..a + M].fill(self.pass);
-        self.moved[b..b + M].fill(self.pass);
+    fn limit<const M: usize>(
+        &mut self,
+        (a, b): (usize, usize),
+        rest: &[f32],
+        lanes: &mut View,
+        factor: f32,
+    ) -> (u32, f32) {
+        if !self.due::<M>((a, b)) {
+            return (0, f32::INFINITY);
+        }
+        let (over, room) = limit_chunk::<M>((a, b), rest, lanes, factor);
+        if over > 0 {
+            self.moved[a..a + M].fill(self.pass);
+            self.moved[b..b + M].fill(self.pass);
+        }
+        (over, room)
     }
 }
 
@@ -760,25 +774,13 @@ fn limit_runs(
         // A run's springs share no particle: `WIDTH` of them at once give
         // the bits of one at a time.
         while done + WIDTH <= len {
-            let ends = (a + done, b + done);
-            if marks.due::<WIDTH>(ends) {
-                let (o, r) = limit_chunk::<WIDTH>(ends, rest, lanes, factor);
-                if o > 0 {
-                    marks.mark::<WIDTH>(ends);
-                }
-                (over, room) = (over + o, room.min(r));
-            }
+            let (o, r) = marks.limit::<WIDTH>((a + done, b + done), rest, lanes, factor);
+            (over, room) = (over + o, room.min(r));
             done += WIDTH;
         }
         while done < len {
-            let ends = (a + done, b + done);
-            if marks.due::<1>(ends) {
-                let (o, r) = limit_chunk::<1>(ends, rest, lanes, factor);
-                if o > 0 {
-                    marks.mark::<1>(ends);
-                }
-                (over, room) = (over + o, room.min(r));
-            }
+            let (o, r) = marks.limit::<1>((a + done, b + done), rest, lanes, factor);
+            (over, room) = (over + o, room.min(r));
             done += 1;
         }
     }
@@ -1182,7 +1184,7 @@ mod tests {
             assert_eq!(room.map(f32::to_bits), Some(bound.to_bits()));
             // Jostled against a 5% limit: a few springs over it, brought
             // within it in a few passes, the passes after the first looking
-            // only at the rows still moving; a spring was shortened to its
+            // only at the springs still moving; a spring was shortened to its
             // limit, so none has room.
             let (mut plan, mut lanes) = setup();
             let (n, room) = limit_stretch_with(&mut plan, &mut lanes, 1.05, Team::ALONE, simd);
