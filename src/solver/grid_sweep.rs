@@ -418,27 +418,61 @@ struct View<'a> {
 }
 
 impl View<'_> {
-    /// The positions at lanes `at..at + M`: x, y, z.
+    /// How many lanes the view has (each of its arrays that many).
     #[inline(always)]
-    fn positions<const M: usize>(&self, at: usize) -> [[f32; M]; 3] {
-        [load(self.x, at), load(self.y, at), load(self.z, at)]
+    fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// The positions at lanes `at..at + M`: x, y, z.
+    ///
+    /// # Safety
+    /// `at + M <= self.len()`.
+    #[inline(always)]
+    unsafe fn positions<const M: usize>(&self, at: usize) -> [[f32; M]; 3] {
+        // SAFETY: in bounds by the caller's promise; the arrays are of one length.
+        unsafe { [load(self.x, at), load(self.y, at), load(self.z, at)] }
     }
 
     /// Writes positions `p` (x, y, z) to lanes `at..at + M`.
+    ///
+    /// # Safety
+    /// As for [`View::positions`].
     #[inline(always)]
-    fn set_positions<const M: usize>(&mut self, at: usize, [x, y, z]: [[f32; M]; 3]) {
-        self.x[at..at + M].copy_from_slice(&x);
-        self.y[at..at + M].copy_from_slice(&y);
-        self.z[at..at + M].copy_from_slice(&z);
+    unsafe fn set_positions<const M: usize>(&mut self, at: usize, [x, y, z]: [[f32; M]; 3]) {
+        // SAFETY: as above.
+        unsafe {
+            store(self.x, at, x);
+            store(self.y, at, y);
+            store(self.z, at, z);
+        }
     }
 }
 
-/// Lanes `at..at + M` of `v`, as an array (a vector load for `M` = 8).
+/// Lanes `at..at + M` of `v`, as an array (a vector load for `M` = 8),
+/// without a bounds check: the kernels check a run's bounds once, not
+/// each of a step's 23 loads and stores twice (with their lengths spilled
+/// to the stack, those compares were a sixth of the sweep's time).
+///
+/// # Safety
+/// `at + M <= v.len()`.
 #[inline(always)]
-fn load<const M: usize>(v: &[f32], at: usize) -> [f32; M] {
-    let mut out = [0.0; M];
-    out.copy_from_slice(&v[at..at + M]);
-    out
+unsafe fn load<const M: usize>(v: &[f32], at: usize) -> [f32; M] {
+    debug_assert!(at + M <= v.len());
+    // SAFETY: in bounds by the caller's promise; `[f32; M]` has the
+    // alignment of `f32`.
+    unsafe { v.as_ptr().add(at).cast::<[f32; M]>().read() }
+}
+
+/// Writes `value` to lanes `at..at + M` of `v`, without a bounds check.
+///
+/// # Safety
+/// As for [`load`].
+#[inline(always)]
+unsafe fn store<const M: usize>(v: &mut [f32], at: usize, value: [f32; M]) {
+    debug_assert!(at + M <= v.len());
+    // SAFETY: as for `load`.
+    unsafe { v.as_mut_ptr().add(at).cast::<[f32; M]>().write(value) }
 }
 
 impl<'a> SharedLanes<'a> {
@@ -724,35 +758,50 @@ impl LimitMarks<'_> {
     /// look: always in the first pass; after it, when an end moved in the
     /// pass before or this one (the others were found within the limit
     /// then and have not changed).
+    ///
+    /// # Safety
+    /// `a + M` and `b + M` are at most the marks' length.
     #[inline(always)]
-    fn due<const M: usize>(&self, (a, b): (usize, usize)) -> bool {
+    unsafe fn due<const M: usize>(&self, (a, b): (usize, usize)) -> bool {
         let recent = |l: &u32| *l + 1 >= self.pass;
-        self.pass == 1
-            || self.moved[a..a + M].iter().any(recent)
-            || self.moved[b..b + M].iter().any(recent)
+        // SAFETY: in bounds by the caller's promise.
+        let (ma, mb) = unsafe {
+            (
+                self.moved.get_unchecked(a..a + M),
+                self.moved.get_unchecked(b..b + M),
+            )
+        };
+        self.pass == 1 || ma.iter().any(recent) || mb.iter().any(recent)
     }
 
     /// [`limit_chunk`] on the `M` springs from lanes `a..` to lanes `b..`
     /// when they are due (else nothing shortened, no room measured),
     /// marking all their ends when it shortened any (a spring looked at
     /// again for nothing gives the same bits).
+    ///
+    /// # Safety
+    /// `a + M` and `b + M` are at most the length of the marks, of `rest`
+    /// and of the view.
     #[inline(always)]
-    fn limit<const M: usize>(
+    unsafe fn limit<const M: usize>(
         &mut self,
         (a, b): (usize, usize),
         rest: &[f32],
         lanes: &mut View,
         factor: f32,
     ) -> (u32, f32) {
-        if !self.due::<M>((a, b)) {
-            return (0, f32::INFINITY);
+        // SAFETY: in bounds by the caller's promise.
+        unsafe {
+            if !self.due::<M>((a, b)) {
+                return (0, f32::INFINITY);
+            }
+            let (over, room) = limit_chunk::<M>((a, b), rest, lanes, factor);
+            if over > 0 {
+                self.moved.get_unchecked_mut(a..a + M).fill(self.pass);
+                self.moved.get_unchecked_mut(b..b + M).fill(self.pass);
+            }
+            (over, room)
         }
-        let (over, room) = limit_chunk::<M>((a, b), rest, lanes, factor);
-        if over > 0 {
-            self.moved[a..a + M].fill(self.pass);
-            self.moved[b..b + M].fill(self.pass);
-        }
-        (over, room)
     }
 }
 
@@ -768,18 +817,27 @@ fn limit_runs(
     marks: &mut LimitMarks,
 ) -> (u32, f32) {
     let (mut over, mut room) = (0, f32::INFINITY);
+    let lanes_len = lanes.len();
+    assert!(
+        rest.len() == lanes_len && marks.moved.len() == lanes_len,
+        "rest lengths and marks for each lane"
+    );
     for seg in runs {
         let (a, b, len) = (seg.a as usize, seg.b as usize, seg.len as usize);
+        // Once a run, for every step's unchecked loads and stores below.
+        assert!(a.max(b) + len <= lanes_len, "a run within its region");
         let mut done = 0;
         // A run's springs share no particle: `WIDTH` of them at once give
         // the bits of one at a time.
         while done + WIDTH <= len {
-            let (o, r) = marks.limit::<WIDTH>((a + done, b + done), rest, lanes, factor);
+            // SAFETY: within the run (asserted).
+            let (o, r) = unsafe { marks.limit::<WIDTH>((a + done, b + done), rest, lanes, factor) };
             (over, room) = (over + o, room.min(r));
             done += WIDTH;
         }
         while done < len {
-            let (o, r) = marks.limit::<1>((a + done, b + done), rest, lanes, factor);
+            // SAFETY: as above.
+            let (o, r) = unsafe { marks.limit::<1>((a + done, b + done), rest, lanes, factor) };
             (over, room) = (over + o, room.min(r));
             done += 1;
         }
@@ -793,20 +851,26 @@ fn limit_runs(
 /// Returns how many it shortened, and the least room the springs had below
 /// the limit, in squares (limit² - length², m²; 0 for one over it, or not
 /// a number).
+///
+/// # Safety
+/// `a + M` and `b + M` are at most the length of `rest` and of the view.
 #[inline(always)]
-fn limit_chunk<const M: usize>(
+unsafe fn limit_chunk<const M: usize>(
     (a, b): (usize, usize),
     rest: &[f32],
     lanes: &mut View,
     factor: f32,
 ) -> (u32, f32) {
-    let [mut xa, mut ya, mut za] = lanes.positions::<M>(a);
-    let [mut xb, mut yb, mut zb] = lanes.positions::<M>(b);
-    let (wa, wb, r) = (
-        load::<M>(lanes.w, a),
-        load::<M>(lanes.w, b),
-        load::<M>(rest, a),
-    );
+    // SAFETY: in bounds by the caller's promise.
+    let [mut xa, mut ya, mut za] = unsafe { lanes.positions::<M>(a) };
+    let [mut xb, mut yb, mut zb] = unsafe { lanes.positions::<M>(b) };
+    let (wa, wb, r) = unsafe {
+        (
+            load::<M>(lanes.w, a),
+            load::<M>(lanes.w, b),
+            load::<M>(rest, a),
+        )
+    };
     // First the squares alone: most springs are surely within the limit
     // (by a margin far above rounding), and then nothing below changes a
     // position, so the root, the division and the stores are not made.
@@ -843,8 +907,11 @@ fn limit_chunk<const M: usize>(
         zb[c] = pick(zb[c] - d[2] * sb, zb[c]);
         over += on as u32;
     }
-    lanes.set_positions(a, [xa, ya, za]);
-    lanes.set_positions(b, [xb, yb, zb]);
+    // SAFETY: as above.
+    unsafe {
+        lanes.set_positions(a, [xa, ya, za]);
+        lanes.set_positions(b, [xb, yb, zb]);
+    }
     (over, room)
 }
 
@@ -899,10 +966,17 @@ const WIDTH: usize = 8;
 #[inline(always)]
 fn run(seg: Segment, rest: &[f32], lambda: &mut [f32], lanes: &mut View, k: Compliance) {
     let (a0, b0, len) = (seg.a as usize, seg.b as usize, seg.len as usize);
+    let room = lanes.len();
+    // Once a run, for every step's unchecked loads and stores below.
+    assert!(
+        a0.max(b0) + len <= room && rest.len() == room && lambda.len() == room,
+        "a run within its region"
+    );
     let mut done = 0;
     while done + WIDTH <= len {
         // Full steps: copies of a constant length, which are vector loads and stores.
-        chunk::<WIDTH>((a0 + done, b0 + done), None, rest, lambda, lanes, k);
+        // SAFETY: within the run, which is within the region (asserted).
+        unsafe { chunk::<WIDTH>((a0 + done, b0 + done), None, rest, lambda, lanes, k) };
         done += WIDTH;
     }
     if done == len {
@@ -914,14 +988,16 @@ fn run(seg: Segment, rest: &[f32], lambda: &mut [f32], lanes: &mut View, k: Comp
     // at a time. Either way the same arithmetic for each spring, so the
     // same bits; the masked step costs what a full one does, where the
     // spring-at-a-time tail cost as much as the rest of a 16-spring run.
-    let (a, b, room) = (a0 + done, b0 + done, lanes.x.len());
+    let (a, b) = (a0 + done, b0 + done);
     if a.max(b) + WIDTH <= room && apart(a as u32, b as u32, WIDTH as u32) {
         let keep: [bool; WIDTH] = std::array::from_fn(|t| t >= len - done);
-        chunk::<WIDTH>((a, b), Some(&keep), rest, lambda, lanes, k);
+        // SAFETY: within the region (tested just above).
+        unsafe { chunk::<WIDTH>((a, b), Some(&keep), rest, lambda, lanes, k) };
         return;
     }
     while done < len {
-        chunk::<1>((a0 + done, b0 + done), None, rest, lambda, lanes, k);
+        // SAFETY: within the run (asserted above).
+        unsafe { chunk::<1>((a0 + done, b0 + done), None, rest, lambda, lanes, k) };
         done += 1;
     }
 }
@@ -929,8 +1005,12 @@ fn run(seg: Segment, rest: &[f32], lambda: &mut [f32], lanes: &mut View, k: Comp
 /// Projects the `M` springs from lanes `a..a + M` to lanes `b..b + M`,
 /// leaving the lanes `keep` marks as they were (their springs are not
 /// projected; `None`: no lane kept, which the inlining folds away).
+///
+/// # Safety
+/// `a + M` and `b + M` are at most the view's length, which `rest` and
+/// `lambda` have too.
 #[inline(always)]
-fn chunk<const M: usize>(
+unsafe fn chunk<const M: usize>(
     (a, b): (usize, usize),
     keep: Option<&[bool; M]>,
     rest: &[f32],
@@ -938,27 +1018,33 @@ fn chunk<const M: usize>(
     lanes: &mut View,
     k: Compliance,
 ) {
-    let [mut xa, mut ya, mut za] = lanes.positions::<M>(a);
-    let [mut xb, mut yb, mut zb] = lanes.positions::<M>(b);
-    let (sxa, sya, sza) = (
-        load::<M>(lanes.sx, a),
-        load::<M>(lanes.sy, a),
-        load::<M>(lanes.sz, a),
-    );
-    let (sxb, syb, szb) = (
-        load::<M>(lanes.sx, b),
-        load::<M>(lanes.sy, b),
-        load::<M>(lanes.sz, b),
-    );
-    let (wa, wb) = (load::<M>(lanes.w, a), load::<M>(lanes.w, b));
-    let mut r = load::<M>(rest, a);
+    // SAFETY: in bounds by the caller's promise. (No closures here: one
+    // passed to `array::map` is not compiled for AVX2, and its loads were
+    // not vector loads.)
+    let [mut xa, mut ya, mut za] = unsafe { lanes.positions::<M>(a) };
+    let [mut xb, mut yb, mut zb] = unsafe { lanes.positions::<M>(b) };
+    let (sxa, sya, sza) = unsafe {
+        (
+            load::<M>(lanes.sx, a),
+            load::<M>(lanes.sy, a),
+            load::<M>(lanes.sz, a),
+        )
+    };
+    let (sxb, syb, szb) = unsafe {
+        (
+            load::<M>(lanes.sx, b),
+            load::<M>(lanes.sy, b),
+            load::<M>(lanes.sz, b),
+        )
+    };
+    let (wa, wb) = unsafe { (load::<M>(lanes.w, a), load::<M>(lanes.w, b)) };
+    let (mut r, mut l) = unsafe { (load::<M>(rest, a), load::<M>(lambda, a)) };
     if let Some(keep) = keep {
         // A rest length of 0: no spring, no change (`project`).
         for c in 0..M {
             r[c] = if keep[c] { 0.0 } else { r[c] };
         }
     }
-    let mut l = load::<M>(lambda, a);
     let old = keep.map(|_| (xa, ya, za, xb, yb, zb, l));
     for c in 0..M {
         let motion = [
@@ -987,9 +1073,12 @@ fn chunk<const M: usize>(
             }
         }
     }
-    lanes.set_positions(a, [xa, ya, za]);
-    lanes.set_positions(b, [xb, yb, zb]);
-    lambda[a..a + M].copy_from_slice(&l);
+    // SAFETY: as above.
+    unsafe {
+        lanes.set_positions(a, [xa, ya, za]);
+        lanes.set_positions(b, [xb, yb, zb]);
+        store(lambda, a, l);
+    }
 }
 
 #[cfg(test)]
@@ -1249,7 +1338,9 @@ mod tests {
                 run(seg, &rest, &mut lambda, &mut view, k);
             } else {
                 for t in 0..seg.len as usize {
-                    chunk::<1>((t, 16 + t), None, &rest, &mut lambda, &mut view, k);
+                    assert!(16 + t < view.len() && rest.len() == view.len());
+                    // SAFETY: in bounds (asserted).
+                    unsafe { chunk::<1>((t, 16 + t), None, &rest, &mut lambda, &mut view, k) };
                 }
             }
             [x, y, z, lambda].map(|v| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
