@@ -20,8 +20,12 @@ use super::particle_pass::{push_out, select, BlockOut, BlockScratch, ParticlePas
 use super::response::FrictionPolicy;
 use crate::math::{simd_available, Vector};
 
-/// Particles in a batch: eight `f32` lanes, one AVX2 register.
-const LANES: usize = 8;
+/// Particles in a batch: eight AVX2 registers of `f32` lanes. Filled one
+/// particle at a time and read eight lanes at a time, a batch of one
+/// register stalled its loads on the stores just made (store forwarding
+/// fails from narrow stores to a wide load); a larger one has its stores
+/// done before it is read, and still fits the first-level cache.
+const LANES: usize = 64;
 
 /// The same for every lane of a block: the obstacle, and the pass's settings.
 #[derive(Clone, Copy)]
@@ -35,7 +39,6 @@ struct Shared {
 
 /// One batch, coordinate by coordinate: what goes in per lane, and what
 /// the law gives back.
-#[derive(Default)]
 struct Batch {
     x: [[f32; LANES]; 3],
     v: [[f32; LANES]; 3],
@@ -69,6 +72,33 @@ struct Batch {
     impulse: [[f32; LANES]; 3],
 }
 
+impl Default for Batch {
+    fn default() -> Self {
+        Batch {
+            x: [[0.0; LANES]; 3],
+            v: [[0.0; LANES]; 3],
+            inv_mass: [0.0; LANES],
+            mass: [0.0; LANES],
+            anchor: [[0.0; LANES]; 3],
+            has_anchor: [0; LANES],
+            listed: [0; LANES],
+            from_cache: [0; LANES],
+            drift2: [0.0; LANES],
+            shift2: [0.0; LANES],
+            near: [0; LANES],
+            inside: [0; LANES],
+            touching: [0; LANES],
+            normal: [[0.0; LANES]; 3],
+            signed_distance: [0.0; LANES],
+            x_out: [[0.0; LANES]; 3],
+            v_out: [[0.0; LANES]; 3],
+            surface_velocity: [[0.0; LANES]; 3],
+            point: [[0.0; LANES]; 3],
+            impulse: [[0.0; LANES]; 3],
+        }
+    }
+}
+
 impl ParticlePass<'_> {
     /// [`ParticlePass::block`] when the one obstacle is `law`'s.
     pub(super) fn lanes_block(
@@ -99,6 +129,11 @@ impl ParticlePass<'_> {
         let mut batch = Batch::default();
         let mut contacts = 0;
         let start = range.start;
+        // The farthest drift and shift, per lane: one running maximum over
+        // the block was a chain of dependent `max`es a particle, an eighth
+        // of the block's time. Every value is a square (never −0) or not a
+        // number, which `max` passes over, so their order changes no bit.
+        let (mut drift2, mut shift2) = ([0.0f32; LANES], [0.0f32; LANES]);
         for chunk in (0..range.len()).step_by(LANES) {
             let count = LANES.min(range.len() - chunk);
             for lane in 0..count {
@@ -131,10 +166,12 @@ impl ParticlePass<'_> {
                 if batch.from_cache[lane] == 0 && out.nearest[k] != NONE {
                     scratch.strays += 1;
                 }
-                scratch.drift2 = scratch.drift2.max(batch.drift2[lane]);
-                scratch.shift2 = scratch.shift2.max(batch.shift2[lane]);
+                drift2[lane] = drift2[lane].max(batch.drift2[lane]);
+                shift2[lane] = shift2[lane].max(batch.shift2[lane]);
             }
         }
+        scratch.drift2 = drift2.into_iter().fold(scratch.drift2, f32::max);
+        scratch.shift2 = shift2.into_iter().fold(scratch.shift2, f32::max);
         contacts
     }
 
@@ -311,7 +348,8 @@ mod tests {
     use crate::collision::tracks::ObstacleTracks;
     use crate::context::StepContext;
 
-    const N: usize = 61;
+    // Two full batches and a short one.
+    const N: usize = 2 * LANES + 22;
 
     /// Particles around a ball of radius 0.5 at the origin (and cuboids of
     /// about that size, which some are inside): far, near,
