@@ -131,6 +131,10 @@ pub(crate) struct GridPlan {
     /// Per pass: the rest length (m) of the spring leaving each lane; 0
     /// where none does.
     rest: Staggered,
+    /// Per bend family (rows, then columns): the length (m) of the two
+    /// stretch springs at rest that the bend spring leaving each lane spans
+    /// (0 where none leaves). The stretch limit holds these pairs too.
+    span: [Vec<f32>; 2],
     /// The longest rest length of a stretch spring (m).
     longest_stretch: f32,
     /// Per lane: the last pass of the stretch limit that moved it (0: none
@@ -348,6 +352,19 @@ impl GridPlan {
             .range(SpringKind::Stretch)
             .map(|s| springs.rest_lengths()[s])
             .fold(0.0, f32::max);
+        // Along rows: (r, c) to (r, c + 2) spans the stretch springs
+        // leaving (r, c) and (r, c + 1); along columns likewise.
+        let span = [(0, 1), (1, cols)].map(|(family, next)| {
+            let (stretch, bend) = (rest.get(family), rest.get(4 + family));
+            let mut span = vec![0.0; n];
+            for i in 0..n {
+                let (l, m) = (lane[i] as usize, i + next);
+                if bend[l] > 0.0 {
+                    span[l] = stretch[l] + stretch[lane[m] as usize];
+                }
+            }
+            span
+        });
         Some(GridPlan {
             lane,
             passes,
@@ -355,6 +372,7 @@ impl GridPlan {
             work,
             lambda: Staggered::new(6, n, LAMBDA_SLOT),
             rest,
+            span,
             longest_stretch,
             limit_moved: vec![0; n],
         })
@@ -613,7 +631,12 @@ fn sweep_region(job: &RegionSweep, view: &mut View, lambda: &mut [f32]) {
 /// runs, up to [`LIMIT_PASSES`] Gauss–Seidel passes (the bands, then the
 /// boundaries, each region's families in turn), each spring longer than
 /// `factor` times its rest length (by more than [`LIMIT_SLACK`] of it)
-/// shortened to it. Returns the springs shortened, and when the last pass
+/// shortened to it. After the first pass, each pass first holds the pairs
+/// of stretch springs along rows and columns (the bend springs' runs) to
+/// `factor` times the length the pair spans at rest: a coarser level,
+/// which carries a correction twice as far a pass and which the springs at
+/// their limits always satisfy (it never holds the cloth tighter than they
+/// do). Returns the springs shortened, and when the last pass
 /// found none to shorten, the room left: how much (m) any stretch spring
 /// may still lengthen before it reaches the limit (the collision stage then
 /// knows which springs it need not hold).
@@ -636,12 +659,13 @@ pub(crate) fn limit_stretch(
 
 /// Gauss–Seidel passes of the grid's stretch limit at most; they stop as
 /// soon as one shortens nothing, and after the first a pass looks only at
-/// the springs still moving. The drape's landing stays under 5% with 16 at
-/// the automatic substeps (N = 64 to 256). Where the whole cloth hangs at
-/// its limit every pass is a whole one: the `hammock`'s cotton rests 5.21%
-/// stretched with 16 (7.3 ms a frame), 4.75% with 32 (9.9 ms), 4.53% with
-/// 64 (15 ms; BENCHMARKS.md, thirteenth session).
-pub(crate) const LIMIT_PASSES: u32 = 16;
+/// the springs still moving. Where the whole cloth hangs at its limit every
+/// pass is a whole one: the `hammock`'s cotton rested 5.21% stretched with
+/// 16 passes of the springs alone, and rests 4.83% with 8 passes that hold
+/// the pairs too, in the same time a frame (4.62% with 16, a third slower).
+/// The drape's landing peaks at 4.52%, 4.57% and 4.72% at N = 64, 128 and
+/// 256 (BENCHMARKS.md, fourteenth session).
+pub(crate) const LIMIT_PASSES: u32 = 8;
 
 /// [`limit_stretch`], with the AVX2 kernel only when `simd`.
 fn limit_stretch_with(
@@ -657,8 +681,26 @@ fn limit_stretch_with(
     plan.limit_moved.fill(0);
     let moved = Disjoint::new(&mut plan.limit_moved[..]);
     let shared = SharedLanes::new(lanes, &mut plan.lambda);
-    let stretch: [bool; 6] = std::array::from_fn(|p| plan.passes[p].kind == SpringKind::Stretch);
-    let rest: [&[f32]; 6] = std::array::from_fn(|p| plan.rest.get(p));
+    // The pairs of stretch springs along rows and columns first (the bend
+    // families' runs, with the length the pair spans at rest), then the
+    // stretch springs themselves: a correction crosses the cloth in half
+    // the passes. No pair is held to less than its two springs at their
+    // limits can reach, so the pairs only hasten what the springs' own
+    // limit would come to (a folded pair is shorter and left alone).
+    let limits: [(usize, &[f32]); 4] = [
+        (4, &plan.span[0]),
+        (5, &plan.span[1]),
+        (0, plan.rest.get(0)),
+        (1, plan.rest.get(1)),
+    ];
+    debug_assert!(limits.iter().all(|&(p, _)| {
+        let kind = plan.passes[p].kind;
+        kind == if p < 4 {
+            SpringKind::Stretch
+        } else {
+            SpringKind::Bend
+        }
+    }));
     let phases = &plan.phases;
     let work = &plan.work;
     // One pass: the springs it shortened, and the least room of those it
@@ -670,7 +712,14 @@ fn limit_stretch_with(
         let room = AtomicU32::new(f32::INFINITY.to_bits());
         let mut over = 0;
         for (phase, work) in phases.iter().zip(work) {
-            let springs = (0..6).filter(|&p| stretch[p]).map(|p| work[p]).sum();
+            // The first pass: the stretch springs alone. The pairs of those
+            // it finds within their limits are within theirs too.
+            let limits = if number == 1 {
+                &limits[2..]
+            } else {
+                &limits[..]
+            };
+            let springs = limits.iter().map(|&(p, _)| work[p]).sum();
             over += team_for(team, springs).sum_over(phase, |region| {
                 // SAFETY: as in `sweep_with`: disjoint regions, borrowed buffers.
                 let (mut view, moved) = unsafe {
@@ -684,10 +733,12 @@ fn limit_stretch_with(
                     moved,
                     pass: number,
                 };
-                for p in (0..6).filter(|&p| stretch[p]) {
-                    let rest = &rest[p][region.lanes.clone()];
+                for &(p, rest) in limits {
+                    let rest = &rest[region.lanes.clone()];
                     let runs = &region.runs[p];
                     let (o, l) = limit_region(runs, rest, &mut view, factor, (&mut marks, simd));
+                    // The room is the stretch springs' alone.
+                    let l = if p < 4 { l } else { f32::INFINITY };
                     (over, least) = (over + o, least.min(l));
                 }
                 room.fetch_min(least.to_bits(), Ordering::Relaxed);
@@ -1172,14 +1223,32 @@ mod tests {
 
     /// The stretch limit as it was written first, one spring at a time.
     fn limit_one_by_one(plan: &GridPlan, lanes: &mut Lanes, factor: f32) -> u32 {
+        limit_one_by_one_with(plan, lanes, factor, true)
+    }
+
+    /// [`limit_one_by_one`], with the pairs of stretch springs or without.
+    fn limit_one_by_one_with(plan: &GridPlan, lanes: &mut Lanes, factor: f32, pairs: bool) -> u32 {
         let [x, y, z, _, _, _, w] = lanes.arrays_mut();
         let mut over = 0;
-        for _ in 0..LIMIT_PASSES {
+        for number in 1..=LIMIT_PASSES {
             let mut this_pass = 0;
-            for p in (0..6).filter(|&p| plan.passes[p].kind == SpringKind::Stretch) {
-                for region in plan.phases.iter().flatten() {
+            // The pairs along rows and columns (after the first pass), then
+            // the stretch springs, region by region.
+            let limits: &[(usize, &[f32])] = &[
+                (4, &plan.span[0]),
+                (5, &plan.span[1]),
+                (0, plan.rest.get(0)),
+                (1, plan.rest.get(1)),
+            ];
+            let limits = if number == 1 || !pairs {
+                &limits[2..]
+            } else {
+                limits
+            };
+            for region in plan.phases.iter().flatten() {
+                for &(p, rest) in limits {
                     let o = region.lanes.start;
-                    let rest = &plan.rest.get(p)[o..];
+                    let rest = &rest[o..];
                     for seg in &region.runs[p] {
                         for t in 0..seg.len as usize {
                             let (a, b) = (seg.a as usize + t, seg.b as usize + t);
@@ -1232,6 +1301,65 @@ mod tests {
             assert_eq!(n, shortened);
             assert_eq!(bits(&mut lanes), bits(&mut reference));
         }
+    }
+
+    /// Each pair of stretch springs along a row or a column is held to the
+    /// length the two span at rest (on a grid spaced unevenly along rows
+    /// and columns), and holding the pairs brings a cloth stretched far past
+    /// the limit closer to it in the same passes than the springs alone.
+    #[test]
+    fn the_pairs_of_stretch_springs_hasten_the_limit() {
+        let cloth = ClothBuilder::new(13, 9).size(1.3, 0.7).build().unwrap();
+        let plan = GridPlan::new(cloth.grid().unwrap(), cloth.springs()).unwrap();
+        let (cols, rows) = (13, 9);
+        let (dx, dz) = (1.3 / 12.0, 0.7 / 8.0);
+        for r in 0..rows {
+            for c in 0..cols {
+                let lane = plan.lane(r * cols + c);
+                let along_row = if c + 2 < cols { 2.0 * dx } else { 0.0 };
+                let along_column = if r + 2 < rows { 2.0 * dz } else { 0.0 };
+                assert!((plan.span[0][lane] - along_row).abs() < 1e-6);
+                assert!((plan.span[1][lane] - along_column).abs() < 1e-6);
+            }
+        }
+        // The worst stretch of a free cloth stretched 40% along x and z,
+        // after the limit of 1% with the pairs and without.
+        let worst = |pairs: bool| {
+            let (plan, mut lanes) = setup();
+            let [x, _, z, .., w] = lanes.arrays_mut();
+            for v in x.iter_mut().chain(z.iter_mut()) {
+                *v *= 1.4;
+            }
+            w.fill(100.0);
+            limit_one_by_one_with(&plan, &mut lanes, 1.01, pairs);
+            let [x, y, z, ..] = lanes.arrays_mut();
+            let springs = cloth_springs();
+            springs
+                .range(SpringKind::Stretch)
+                .map(|s| {
+                    let (a, b) = (
+                        plan.lane(springs.a[s] as usize),
+                        plan.lane(springs.b[s] as usize),
+                    );
+                    let d = [x[b] - x[a], y[b] - y[a], z[b] - z[a]];
+                    (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() / springs.rest[s]
+                })
+                .fold(0.0, f32::max)
+        };
+        let (with, without) = (worst(true), worst(false));
+        assert!(
+            without > 1.02,
+            "{without}: the test needs a limit not reached"
+        );
+        assert!(
+            with < without - 0.005,
+            "with the pairs {with}, without {without}"
+        );
+    }
+
+    /// The springs of the cloth of [`setup`].
+    fn cloth_springs() -> crate::cloth::Springs {
+        ClothBuilder::new(13, 9).build().unwrap().springs().clone()
     }
 
     /// The room the limit reports is, over every stretch spring of the

@@ -68,7 +68,7 @@ fn spring_sums(cloth: &Cloth, degree: &[u32; 3]) -> (f32, f32) {
 /// rests stretched. Measured on a 48×48 cotton tablecloth at rest on a
 /// table (2 sweeps a substep, a stretch limit of 4 passes): 5.9–6.1%
 /// stretch at 1.5 times the limit, 3.4–4.2% at 1 (symplectic Euler: 3.7%).
-/// Since the grid's limit makes up to 16 passes, the later ones only over
+/// Since the grid's limit makes more passes, the later ones only over
 /// the springs still moving (`grid_sweep::LIMIT_PASSES`), the woven
 /// presets' landings stay under 5% with fewer substeps; 1.25 keeps five
 /// boxes dropped on a canvas sheet on it (`tests/user_drops.rs`; at 1.5 one
