@@ -379,9 +379,14 @@ impl GridPlan {
     }
 
     /// The lane of particle `i`.
-    #[inline]
+    #[cfg(test)]
     pub fn lane(&self, i: usize) -> usize {
         self.lane[i] as usize
+    }
+
+    /// The lanes of the particles `range` (whole rows: each in `range` too).
+    pub fn lanes_of(&self, range: &std::ops::Range<usize>) -> &[u32] {
+        &self.lane[range.clone()]
     }
 
     /// Runs `f` on the particles of each band of rows (a range of particle

@@ -127,13 +127,19 @@ pub(crate) fn step(
                         lanes.map(|s| s.range(band.clone())),
                     )
                 };
-                for (k, i) in band.clone().enumerate() {
+                let (lanes, w) = (plan.lanes_of(&band), &model.inv_mass[band.clone()]);
+                // One length for all, so that each index is checked once.
+                let len = band.len();
+                assert!([x.len(), v.len(), lanes.len(), w.len()] == [len; 4]);
+                assert!([lx.len(), ly.len(), lz.len(), sx.len(), sy.len(), sz.len()] == [len; 6]);
+                assert!(lw.len() == len);
+                for k in 0..len {
                     let start = x[k];
-                    predict(model, wind, i, (&mut x[k], &mut v[k]), h);
-                    let (lane, p) = (plan_lane(plan, i, &band), x[k]);
+                    predict(model, wind, band.start + k, (&mut x[k], &mut v[k]), h);
+                    let (lane, p) = (lanes[k] as usize - band.start, x[k]);
                     (lx[lane], ly[lane], lz[lane]) = (p.x, p.y, p.z);
                     (sx[lane], sy[lane], sz[lane]) = (start.x, start.y, start.z);
-                    lw[lane] = model.inv_mass[i];
+                    lw[lane] = w[k];
                 }
             });
             for _ in 0..sub.settings.xpbd_iterations {
@@ -150,10 +156,14 @@ pub(crate) fn step(
                         lanes.map(|s| s.range(band.clone())),
                     )
                 };
-                for (k, i) in band.clone().enumerate() {
-                    let lane = plan_lane(plan, i, &band);
+                let (lanes, w) = (plan.lanes_of(&band), &model.inv_mass[band.clone()]);
+                let len = band.len();
+                assert!([x.len(), v.len(), lanes.len(), w.len()] == [len; 4]);
+                assert!([lx.len(), ly.len(), lz.len()] == [len; 3]);
+                for k in 0..len {
+                    let lane = lanes[k] as usize - band.start;
                     let swept = Vector::new(lx[lane], ly[lane], lz[lane]);
-                    correct_velocity(&mut v[k], swept - x[k], model.inv_mass[i], h);
+                    correct_velocity(&mut v[k], swept - x[k], w[k], h);
                     x[k] = swept;
                 }
             });
@@ -205,12 +215,6 @@ fn predict(
         *v += a * h;
     }
     *x += *v * h;
-}
-
-/// The lane of particle `i` counted from the start of its `band`.
-#[inline(always)]
-fn plan_lane(plan: &GridPlan, i: usize, band: &std::ops::Range<usize>) -> usize {
-    plan.lane(i) - band.start
 }
 
 /// The velocity at the end of a substep of `h` seconds: the predicted one
