@@ -134,13 +134,19 @@ impl ParticlePass<'_> {
         // of the block's time. Every value is a square (never −0) or not a
         // number, which `max` passes over, so their order changes no bit.
         let (mut drift2, mut shift2) = ([0.0f32; LANES], [0.0f32; LANES]);
-        for chunk in (0..range.len()).step_by(LANES) {
-            let count = LANES.min(range.len() - chunk);
+        // The block's particles' arrays, of one length checked once (each
+        // index below is then checked once, not per array).
+        let n = range.len();
+        let cache = self.tracks.cache_for(range.clone());
+        let (inv_mass, mass) = (&self.inv_mass[range.clone()], &self.mass[range.clone()]);
+        assert!([out.x.len(), out.v.len(), inv_mass.len(), mass.len()] == [n; 4]);
+        for chunk in (0..n).step_by(LANES) {
+            let count = LANES.min(n - chunk);
             for lane in 0..count {
-                let (k, i) = (chunk + lane, start + chunk + lane);
+                let k = chunk + lane;
                 let (x, v) = (out.x[k], out.v[k]);
-                let (anchor, has_anchor, listed) = match self.tracks.cache_of(i) {
-                    Some((anchor, listed)) => (anchor, true, listed),
+                let (anchor, has_anchor, listed) = match cache {
+                    Some((anchors, starts)) => (anchors[k], true, starts[k] != starts[k + 1]),
                     None => (Vector::ZERO, false, false),
                 };
                 for a in 0..3 {
@@ -148,8 +154,8 @@ impl ParticlePass<'_> {
                     batch.v[a][lane] = v[a];
                     batch.anchor[a][lane] = anchor[a];
                 }
-                batch.inv_mass[lane] = self.inv_mass[i];
-                batch.mass[lane] = self.mass[i];
+                batch.inv_mass[lane] = inv_mass[k];
+                batch.mass[lane] = mass[k];
                 batch.has_anchor[lane] = has_anchor as u32;
                 batch.listed[lane] = listed as u32;
             }

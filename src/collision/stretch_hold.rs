@@ -18,6 +18,18 @@ use super::stage::CollisionStage;
 use crate::cloth::{Particles, SpringKind, Springs};
 use crate::math::Vector;
 
+/// The stretch springs at each particle, counted in spring order among the
+/// stretch springs (a particle's in `springs[start[i]..start[i + 1]]`).
+#[derive(Debug, Default)]
+pub(super) struct StretchIncidence {
+    start: Vec<u32>,
+    springs: Vec<u32>,
+    /// Scratch of the filling.
+    fill: Vec<u32>,
+    /// Made this step (for its springs and watch).
+    pub built: bool,
+}
+
 /// Rounds of shortening and pushing out at most; they stop when no spring
 /// near an obstacle is over the limit.
 const ROUNDS: usize = 4;
@@ -54,59 +66,53 @@ impl CollisionStage {
         } else {
             stretch.len()
         };
+        if !self.stretch_at.built {
+            self.index_stretch_springs(springs, particles.len());
+        }
         let mut shortened = 0;
         for round in 0..ROUNDS {
             self.moved.clear();
-            for k in 0..count {
-                let s = if watched {
-                    self.edge_watch[k] as usize
-                } else {
-                    stretch.start + k
-                };
-                let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
-                // After the first round, a spring can be over the limit only
-                // if the last round or this one moved an end: the others
-                // kept the length a round found within it. Skipping them
-                // is what a full look would do (nothing), at a fraction of
-                // the cost: a round shortens a few springs of thousands.
-                let touched = |i: usize| self.held_moved[i] || self.edge_moved[i];
-                if round > 0 && !touched(a) && !touched(b) {
-                    continue;
+            if round == 0 {
+                for k in 0..count {
+                    let s = if watched {
+                        self.edge_watch[k] as usize
+                    } else {
+                        stretch.start + k
+                    };
+                    shortened += self.hold_spring(particles, springs, s, factor) as u32;
                 }
-                if self.nearest[a] == NONE && self.nearest[b] == NONE {
-                    continue;
+            } else {
+                // After the first round, a spring can be over the limit
+                // only if the last round or this one moved an end: the
+                // others kept the length a round found within it. So the
+                // springs at the particles the last round moved are due,
+                // and as this round moves a particle, its springs further
+                // on in spring order; the due springs are taken in spring
+                // order, as a look at every spring that skipped the others
+                // took them (the same bits), at the cost of those alone
+                // (a round shortens a few springs of thousands).
+                self.hold_due.fill(0);
+                for k in 0..self.held_before.len() {
+                    let i = self.held_before[k] as usize;
+                    self.mark_due(i, 0, watched);
                 }
-                // Only ends near an obstacle move: an end away from them
-                // has other springs, which this pass does not look at and
-                // must not stretch (it is held like a pin here).
-                let Particles { x, v, inv_mass, .. } = &mut *particles;
-                let near = |i: usize| self.nearest[i] != NONE;
-                let wa = if near(a) { inv_mass[a] } else { 0.0 };
-                let wb = if near(b) { inv_mass[b] } else { 0.0 };
-                let w = wa + wb;
-                let d = x[b] - x[a];
-                let limit = springs.rest[s] * factor;
-                let len2 = d.length_squared();
-                // Over by more than the slack every limit allows (also
-                // false for a length that is not a number).
-                let slack = limit * (1.0 + LIMIT_SLACK);
-                let over = len2 > slack * slack;
-                if !over || w == 0.0 {
-                    continue;
-                }
-                let len = len2.sqrt();
-                let n = d / len;
-                let step = n * ((len - limit) / w);
-                x[a] += step * wa;
-                x[b] -= step * wb;
-                stop_separating(v, (a, b), n, (wa, wb));
-                for (i, wi) in [(a, wa), (b, wb)] {
-                    if wi != 0.0 && !self.edge_moved[i] {
-                        self.edge_moved[i] = true;
-                        self.moved.push(i as u32);
+                let mut word = 0;
+                while word < self.hold_due.len() {
+                    let bits = self.hold_due[word];
+                    if bits == 0 {
+                        word += 1;
+                        continue;
+                    }
+                    self.hold_due[word] = bits & (bits - 1);
+                    let k = word * 64 + bits.trailing_zeros() as usize;
+                    let s = stretch.start + k;
+                    let before = self.moved.len();
+                    shortened += self.hold_spring(particles, springs, s, factor) as u32;
+                    for m in before..self.moved.len() {
+                        let i = self.moved[m] as usize;
+                        self.mark_due(i, k + 1, watched);
                     }
                 }
-                shortened += 1;
             }
             // The last round's marks give way to this one's.
             self.forget_held();
@@ -128,6 +134,112 @@ impl CollisionStage {
         }
         self.forget_held();
         shortened
+    }
+
+    /// Holds stretch spring `s` to `factor` times its rest length if an end
+    /// is near an obstacle, moving only such ends (an end away from them has
+    /// other springs, which this pass does not look at and must not
+    /// stretch: it is held like a pin here), and lists the particles it
+    /// moved for the first time this round in `moved`. Returns whether it
+    /// shortened the spring.
+    fn hold_spring(
+        &mut self,
+        particles: &mut Particles,
+        springs: &Springs,
+        s: usize,
+        factor: f32,
+    ) -> bool {
+        let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
+        if self.nearest[a] == NONE && self.nearest[b] == NONE {
+            return false;
+        }
+        let Particles { x, v, inv_mass, .. } = &mut *particles;
+        let near = |i: usize| self.nearest[i] != NONE;
+        let wa = if near(a) { inv_mass[a] } else { 0.0 };
+        let wb = if near(b) { inv_mass[b] } else { 0.0 };
+        let w = wa + wb;
+        let d = x[b] - x[a];
+        let limit = springs.rest[s] * factor;
+        let len2 = d.length_squared();
+        // Over by more than the slack every limit allows (also false for a
+        // length that is not a number).
+        let slack = limit * (1.0 + LIMIT_SLACK);
+        let over = len2 > slack * slack;
+        if !over || w == 0.0 {
+            return false;
+        }
+        let len = len2.sqrt();
+        let n = d / len;
+        let step = n * ((len - limit) / w);
+        x[a] += step * wa;
+        x[b] -= step * wb;
+        stop_separating(v, (a, b), n, (wa, wb));
+        for (i, wi) in [(a, wa), (b, wb)] {
+            if wi != 0.0 && !self.edge_moved[i] {
+                self.edge_moved[i] = true;
+                self.moved.push(i as u32);
+            }
+        }
+        true
+    }
+
+    /// Marks due, for the hold's next look, the stretch springs at particle
+    /// `i` from the `from`th on (counted in spring order among the stretch
+    /// springs), those the hold looks at (the watched ones, when `watched`).
+    fn mark_due(&mut self, i: usize, from: usize, watched: bool) {
+        let at = &self.stretch_at;
+        for &k in &at.springs[at.start[i] as usize..at.start[i + 1] as usize] {
+            let k = k as usize;
+            if k >= from && (!watched || self.hold_watch[k / 64] >> (k % 64) & 1 != 0) {
+                self.hold_due[k / 64] |= 1 << (k % 64);
+            }
+        }
+    }
+
+    /// Lists the stretch springs at each particle (of `n`), counted in
+    /// spring order among the stretch springs, and which of them the edge
+    /// watch holds; sizes the due marks. Once a step, when the watch is made
+    /// ([`CollisionStage::cache_candidates`]), or at the hold's first look
+    /// in a step without one.
+    pub(super) fn index_stretch_springs(&mut self, springs: &Springs, n: usize) {
+        let stretch = springs.range(SpringKind::Stretch);
+        let words = stretch.len().div_ceil(64);
+        self.hold_due.clear();
+        self.hold_due.resize(words, 0);
+        self.hold_watch.clear();
+        self.hold_watch.resize(words, 0);
+        for &s in &self.edge_watch {
+            let s = s as usize;
+            if stretch.contains(&s) {
+                let k = s - stretch.start;
+                self.hold_watch[k / 64] |= 1 << (k % 64);
+            }
+        }
+        let at = &mut self.stretch_at;
+        at.built = true;
+        at.start.clear();
+        at.start.resize(n + 1, 0);
+        for s in stretch.clone() {
+            for e in [springs.a[s], springs.b[s]] {
+                at.start[e as usize + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            at.start[i + 1] += at.start[i];
+        }
+        at.springs.clear();
+        at.springs.resize(2 * stretch.len(), 0);
+        // Filled in spring order: each particle's list ascends.
+        let mut next = std::mem::take(&mut at.fill);
+        next.clear();
+        next.extend_from_slice(&at.start[..n]);
+        for (k, s) in stretch.enumerate() {
+            for e in [springs.a[s] as usize, springs.b[s] as usize] {
+                at.springs[next[e] as usize] = k as u32;
+                next[e] += 1;
+            }
+        }
+        at.fill = next;
     }
 
     /// Clears the marks of the particles the stretch hold's last round moved.

@@ -213,12 +213,13 @@ impl ObstacleTracks {
         })
     }
 
-    /// Where particle `i` was when the step's cache was made (m), and
-    /// whether the cache lists any obstacle for it; `None` without a cache.
-    #[inline(always)]
-    pub(super) fn cache_of(&self, i: usize) -> Option<(Vector, bool)> {
-        let &anchor = self.anchors.get(i)?;
-        Some((anchor, self.cache_start[i] != self.cache_start[i + 1]))
+    /// For particles `range`: where each was when the step's cache was made
+    /// (m), and the starts of their lists in the cache (one more than the
+    /// particles: a list ends where the next starts); `None` without a cache.
+    #[inline]
+    pub(super) fn cache_for(&self, range: std::ops::Range<usize>) -> Option<(&[Vector], &[u32])> {
+        let anchors = self.anchors.get(range.clone())?;
+        Some((anchors, &self.cache_start[range.start..range.end + 1]))
     }
 
     /// True when no cache was made this step.
