@@ -9,6 +9,7 @@ use super::contact_set::{ContactSet, ParticleContact, NONE};
 use super::obstacle::{Obstacle, ObstacleImpulse};
 use super::particle_pass::{BlockOut, BlockScratch, ParticlePass, BLOCK, CONTACT_SLACK};
 use super::response::FrictionPolicy;
+use super::stretch_hold::StretchIncidence;
 use super::tracks::ObstacleTracks;
 use crate::cloth::{Particles, SpringKind, Springs};
 use crate::context::StepContext;
@@ -68,6 +69,12 @@ pub struct CollisionStage {
     pub(super) held_moved: Vec<bool>,
     /// The particles `held_moved` marks, each once.
     pub(super) held_before: Vec<u32>,
+    /// The stretch springs at each particle, for the stretch hold.
+    pub(super) stretch_at: StretchIncidence,
+    /// Bits over the stretch springs (in spring order among them): due for
+    /// the stretch hold's next look, and watched this substep.
+    pub(super) hold_due: Vec<u64>,
+    pub(super) hold_watch: Vec<u64>,
     /// Per block of the particle pass: its scratch.
     blocks: Vec<BlockScratch>,
     /// Per block of [`EDGE_BLOCK`] springs: those the edge pass must look at.
@@ -108,6 +115,7 @@ impl CollisionStage {
         self.held_moved.resize(particles, false);
         self.held_before.clear();
         self.held_before.reserve(particles);
+        self.stretch_at.built = false;
         self.contacts.begin_step(particles, obstacles.len());
         self.longest_edge = f32::INFINITY;
     }
@@ -144,6 +152,7 @@ impl CollisionStage {
             };
         }
         self.longest_edge = longest2.sqrt();
+        self.index_stretch_springs(springs, x.len());
     }
 
     /// Moves the obstacles to where they are at the end of the context's substep.
