@@ -365,7 +365,7 @@ impl CollisionStage {
         let roomy = |room: f32| 4.0 * shift2.sqrt() + ROOM_EPSILON < room;
         if edges_moved || !options.stretch_room.is_some_and(roomy) {
             let limit = (options.stretch_limit, thickness, watched);
-            self.hold_stretch_limit(particles, springs, obstacles, limit);
+            self.hold_stretch_limit(particles, springs, obstacles, limit, options.team);
         }
         contacts
     }

@@ -17,6 +17,7 @@ use super::obstacle::Obstacle;
 use super::stage::CollisionStage;
 use crate::cloth::{Particles, SpringKind, Springs};
 use crate::math::Vector;
+use crate::parallel::{Disjoint, Team};
 
 /// The stretch springs at each particle, counted in spring order among the
 /// stretch springs (a particle's in `springs[start[i]..start[i + 1]]`).
@@ -33,6 +34,10 @@ pub(super) struct StretchIncidence {
 /// Rounds of shortening and pushing out at most; they stop when no spring
 /// near an obstacle is over the limit.
 const ROUNDS: usize = 4;
+
+/// Words of due marks (64 stretch springs each) one work item of the
+/// first round's search finds.
+const HOLD_WORDS: usize = 32;
 
 /// How far over its limit, as a share of it, a spring may be and count as
 /// within it, in every stretch limit (this hold, the solvers' limit after
@@ -54,6 +59,7 @@ impl CollisionStage {
         springs: &Springs,
         obstacles: &[Obstacle],
         (factor, thickness, watched): (f32, f32, bool),
+        team: Team,
     ) -> u32 {
         if !factor.is_finite() {
             return 0;
@@ -72,46 +78,44 @@ impl CollisionStage {
         let mut shortened = 0;
         for round in 0..ROUNDS {
             self.moved.clear();
+            // A spring is shortened only when it is over the limit, and
+            // can come to be only when the round moves an end before its
+            // turn. So the due springs are those over it as the round
+            // begins, and as the round moves a particle its springs
+            // further on in spring order; taken in spring order, they give
+            // the bits of a look at every spring in order (a round shortens
+            // a few springs of thousands). In the first round those over
+            // are found on the team's threads; after it, only springs at
+            // the particles the last round moved can be (the others kept
+            // the length that round found within the limit).
             if round == 0 {
-                for k in 0..count {
-                    let s = if watched {
-                        self.edge_watch[k] as usize
-                    } else {
-                        stretch.start + k
-                    };
-                    shortened += self.hold_spring(particles, springs, s, factor) as u32;
+                if count > 0 {
+                    self.mark_over(particles, springs, (factor, watched), team);
+                } else {
+                    self.hold_due.fill(0);
                 }
             } else {
-                // After the first round, a spring can be over the limit
-                // only if the last round or this one moved an end: the
-                // others kept the length a round found within it. So the
-                // springs at the particles the last round moved are due,
-                // and as this round moves a particle, its springs further
-                // on in spring order; the due springs are taken in spring
-                // order, as a look at every spring that skipped the others
-                // took them (the same bits), at the cost of those alone
-                // (a round shortens a few springs of thousands).
                 self.hold_due.fill(0);
                 for k in 0..self.held_before.len() {
                     let i = self.held_before[k] as usize;
                     self.mark_due(i, 0, watched);
                 }
-                let mut word = 0;
-                while word < self.hold_due.len() {
-                    let bits = self.hold_due[word];
-                    if bits == 0 {
-                        word += 1;
-                        continue;
-                    }
-                    self.hold_due[word] = bits & (bits - 1);
-                    let k = word * 64 + bits.trailing_zeros() as usize;
-                    let s = stretch.start + k;
-                    let before = self.moved.len();
-                    shortened += self.hold_spring(particles, springs, s, factor) as u32;
-                    for m in before..self.moved.len() {
-                        let i = self.moved[m] as usize;
-                        self.mark_due(i, k + 1, watched);
-                    }
+            }
+            let mut word = 0;
+            while word < self.hold_due.len() {
+                let bits = self.hold_due[word];
+                if bits == 0 {
+                    word += 1;
+                    continue;
+                }
+                self.hold_due[word] = bits & (bits - 1);
+                let k = word * 64 + bits.trailing_zeros() as usize;
+                let s = stretch.start + k;
+                let before = self.moved.len();
+                shortened += self.hold_spring(particles, springs, s, factor) as u32;
+                for m in before..self.moved.len() {
+                    let i = self.moved[m] as usize;
+                    self.mark_due(i, k + 1, watched);
                 }
             }
             // The last round's marks give way to this one's.
@@ -181,6 +185,56 @@ impl CollisionStage {
             }
         }
         true
+    }
+
+    /// Marks due the stretch springs the hold looks at (the watched ones,
+    /// when `watched`) that are over `factor` times their rest length by
+    /// more than the slack with an end near an obstacle, and no others:
+    /// the springs [`Self::hold_spring`] would shorten as things stand. On
+    /// the team's threads, 64 springs to a word and [`HOLD_WORDS`] words to
+    /// an item.
+    fn mark_over(
+        &mut self,
+        particles: &Particles,
+        springs: &Springs,
+        (factor, watched): (f32, bool),
+        team: Team,
+    ) {
+        let stretch = springs.range(SpringKind::Stretch);
+        let (nearest, watch, x) = (&self.nearest, &self.hold_watch, &particles.x);
+        let words = self.hold_due.len();
+        let due = Disjoint::new(&mut self.hold_due[..]);
+        team.sum_count(words.div_ceil(HOLD_WORDS), |item| {
+            let first = item * HOLD_WORDS;
+            let last = (first + HOLD_WORDS).min(words);
+            // SAFETY: item `item` alone writes these words.
+            let due = unsafe { due.range(first..last) };
+            for (word, bits) in (first..last).zip(due) {
+                let mut looked = if watched { watch[word] } else { u64::MAX };
+                let end = ((word + 1) * 64).min(stretch.len());
+                if word * 64 + 64 > end {
+                    looked &= (1u64 << (end - word * 64)) - 1;
+                }
+                *bits = 0;
+                while looked != 0 {
+                    let bit = looked.trailing_zeros() as usize;
+                    looked &= looked - 1;
+                    let s = stretch.start + word * 64 + bit;
+                    let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
+                    if nearest[a] == NONE && nearest[b] == NONE {
+                        continue;
+                    }
+                    // As in `hold_spring` (a spring due for nothing would
+                    // be looked at for nothing: the same bits).
+                    let limit = springs.rest[s] * factor;
+                    let slack = limit * (1.0 + LIMIT_SLACK);
+                    if (x[b] - x[a]).length_squared() > slack * slack {
+                        *bits |= 1 << bit;
+                    }
+                }
+            }
+            0
+        });
     }
 
     /// Marks due, for the hold's next look, the stretch springs at particle
