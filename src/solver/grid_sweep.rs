@@ -399,11 +399,28 @@ impl GridPlan {
         });
     }
 
-    /// Starts a substep: every spring's multiplier back to zero.
-    pub fn reset(&mut self) {
-        for lambda in self.lambda.all_mut() {
-            lambda.fill(0.0);
-        }
+    /// Starts a substep: runs `f` on the particles of each band and their
+    /// lanes ([`Self::lanes_of`]), as [`Self::for_each_band`] does, and
+    /// sets the multipliers of the band's
+    /// lanes back to zero on the same thread (one handout, not a serial fill
+    /// of six arrays: 2% of the main thread's time at N = 128 on two).
+    pub fn for_each_band_from_zero(
+        &mut self,
+        team: Team,
+        f: impl Fn(std::ops::Range<usize>, &[u32]) + Sync,
+    ) {
+        let lane = &self.lane;
+        let mut arrays = self.lambda.all_mut().map(Disjoint::new);
+        let lambda: [Disjoint<f32>; 6] =
+            std::array::from_fn(|_| arrays.next().expect("six passes"));
+        team.sum_over(&self.phases[0], |band| {
+            for lambda in lambda {
+                // SAFETY: bands are disjoint ranges of lanes.
+                unsafe { lambda.range(band.lanes.clone()) }.fill(0.0);
+            }
+            f(band.lanes.clone(), &lane[band.lanes.clone()]);
+            0
+        });
     }
 }
 

@@ -112,14 +112,14 @@ pub(crate) fn step(
     }
     match (&mut ws.plan, sub.grid) {
         (Some(plan), Some(_)) => {
-            plan.reset();
             let team = sub.team;
             let l = &mut ws.lanes;
             l.resize(n);
             // Predict, and copy into the lanes: positions now, at the
             // substep's start, and inverse masses; band by band.
             let (xs, vs, lanes) = (Disjoint::new(x), Disjoint::new(v), l.disjoint());
-            plan.for_each_band(team, |band| {
+            // The multipliers start the substep at zero, band by band too.
+            plan.for_each_band_from_zero(team, |band, lanes_of_band| {
                 // SAFETY: bands are disjoint ranges of particles and of lanes.
                 let ([x, v], [lx, ly, lz, sx, sy, sz, lw]) = unsafe {
                     (
@@ -127,7 +127,7 @@ pub(crate) fn step(
                         lanes.map(|s| s.range(band.clone())),
                     )
                 };
-                let (lanes, w) = (plan.lanes_of(&band), &model.inv_mass[band.clone()]);
+                let (lanes, w) = (lanes_of_band, &model.inv_mass[band.clone()]);
                 // One length for all, so that each index is checked once.
                 let len = band.len();
                 assert!([x.len(), v.len(), lanes.len(), w.len()] == [len; 4]);
