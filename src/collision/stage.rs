@@ -20,6 +20,10 @@ use crate::parallel::{Disjoint, Team};
 /// near an obstacle), a block to a thread.
 const EDGE_BLOCK: usize = 4096;
 
+/// The bit of an edge list's entry that marks its spring far from every
+/// obstacle as the edge pass begins (spring indices stay below it).
+const FAR: u32 = 1 << 31;
+
 /// How [`CollisionStage::resolve`] goes about a substep's contacts.
 #[derive(Clone, Copy)]
 pub(crate) struct ResolveOptions<'a> {
@@ -405,7 +409,19 @@ impl CollisionStage {
         if self.edge_blocks.len() < blocks {
             self.edge_blocks.resize_with(blocks, EdgeList::default);
         }
-        let (nearest, normal) = (&self.nearest, &self.normal);
+        let (nearest, normal, distance) = (&self.nearest, &self.normal, &self.distance);
+        let reach = self.tracks.reach;
+        let x = &particles.x;
+        // Distance to a surface changes no faster than along the spring, so
+        // no point of it comes closer than (d_a + d_b - length) / 2: a
+        // spring whose ends lie so far needs no look while they stay put.
+        let far = |(a, b): (usize, usize)| {
+            let (oa, ob) = (nearest[a], nearest[b]);
+            let da = if oa == NONE { reach } else { distance[a] };
+            let db = if ob == NONE { reach } else { distance[b] };
+            let length = (x[b] - x[a]).length();
+            0.5 * (da + db - length) >= 0.5 * thickness
+        };
         let lists = Disjoint::new(&mut self.edge_blocks[..]);
         team.sum_count(blocks, |k| {
             // SAFETY: block `k` alone uses list `k`.
@@ -420,31 +436,40 @@ impl CollisionStage {
                 {
                     continue;
                 }
-                list.push(s as u32);
+                // Whether it is far as the pass begins, found here on the
+                // team's threads (the sort's root and scattered loads were a
+                // fifth of the serial pass below).
+                list.push(s as u32 | if far((a, b)) { FAR } else { 0 });
             }
             0
         });
         let lists = std::mem::take(&mut self.edge_blocks);
         self.moved.clear();
-        for &s in lists[..blocks].iter().flat_map(|l| &l.0) {
-            let s = s as usize;
+        for &listed in lists[..blocks].iter().flat_map(|l| &l.0) {
+            let s = (listed & !FAR) as usize;
             let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
-            let (oa, ob) = (self.nearest[a], self.nearest[b]);
-            // Distance to a surface changes no faster than along the
-            // spring, so no point of it comes closer than
-            // (d_a + d_b - length) / 2.
-            let da = if oa == NONE {
-                self.tracks.reach
+            // Far as the pass began, and both ends where they were then:
+            // far still (the same test on the same numbers). An end moved
+            // by a spring before this one: tested afresh.
+            let unmoved = !self.edge_moved[a] && !self.edge_moved[b];
+            let far = if unmoved {
+                listed & FAR != 0
             } else {
-                self.distance[a]
+                let (oa, ob) = (self.nearest[a], self.nearest[b]);
+                let da = if oa == NONE {
+                    self.tracks.reach
+                } else {
+                    self.distance[a]
+                };
+                let db = if ob == NONE {
+                    self.tracks.reach
+                } else {
+                    self.distance[b]
+                };
+                let length = (particles.x[b] - particles.x[a]).length();
+                0.5 * (da + db - length) >= 0.5 * thickness
             };
-            let db = if ob == NONE {
-                self.tracks.reach
-            } else {
-                self.distance[b]
-            };
-            let length = (particles.x[b] - particles.x[a]).length();
-            if 0.5 * (da + db - length) >= 0.5 * thickness {
+            if far {
                 continue;
             }
             self.resolve_spring(particles, a, b, obstacles, 0.5 * thickness);
