@@ -24,6 +24,36 @@ const EDGE_BLOCK: usize = 4096;
 /// obstacle as the edge pass begins (spring indices stay below it).
 const FAR: u32 = 1 << 31;
 
+/// What the particle pass found of each particle's distance to the
+/// obstacles, for the edge pass's test of a spring.
+struct EndDistances<'a> {
+    /// Per particle: the nearest obstacle, or `NONE` beyond reach.
+    nearest: &'a [u32],
+    /// Per particle: its signed distance to that obstacle (m).
+    distance: &'a [f32],
+    /// The distance (m) taken for a particle beyond reach.
+    reach: f32,
+}
+
+impl EndDistances<'_> {
+    /// Whether the spring from particle `a` to `b` (at `x`) is surely at
+    /// least half the `thickness` from every obstacle: distance to a surface
+    /// changes no faster than along the spring, so no point of it comes
+    /// closer than (d_a + d_b - length) / 2.
+    #[inline]
+    fn far(&self, x: &[Vector], (a, b): (usize, usize), thickness: f32) -> bool {
+        let d = |i: usize| {
+            if self.nearest[i] == NONE {
+                self.reach
+            } else {
+                self.distance[i]
+            }
+        };
+        let length = (x[b] - x[a]).length();
+        0.5 * (d(a) + d(b) - length) >= 0.5 * thickness
+    }
+}
+
 /// How [`CollisionStage::resolve`] goes about a substep's contacts.
 #[derive(Clone, Copy)]
 pub(crate) struct ResolveOptions<'a> {
@@ -409,19 +439,13 @@ impl CollisionStage {
         if self.edge_blocks.len() < blocks {
             self.edge_blocks.resize_with(blocks, EdgeList::default);
         }
-        let (nearest, normal, distance) = (&self.nearest, &self.normal, &self.distance);
-        let reach = self.tracks.reach;
-        let x = &particles.x;
-        // Distance to a surface changes no faster than along the spring, so
-        // no point of it comes closer than (d_a + d_b - length) / 2: a
-        // spring whose ends lie so far needs no look while they stay put.
-        let far = |(a, b): (usize, usize)| {
-            let (oa, ob) = (nearest[a], nearest[b]);
-            let da = if oa == NONE { reach } else { distance[a] };
-            let db = if ob == NONE { reach } else { distance[b] };
-            let length = (x[b] - x[a]).length();
-            0.5 * (da + db - length) >= 0.5 * thickness
+        let (nearest, normal) = (&self.nearest, &self.normal);
+        let ends = EndDistances {
+            nearest,
+            distance: &self.distance,
+            reach: self.tracks.reach,
         };
+        let x = &particles.x;
         let lists = Disjoint::new(&mut self.edge_blocks[..]);
         team.sum_count(blocks, |k| {
             // SAFETY: block `k` alone uses list `k`.
@@ -439,7 +463,14 @@ impl CollisionStage {
                 // Whether it is far as the pass begins, found here on the
                 // team's threads (the sort's root and scattered loads were a
                 // fifth of the serial pass below).
-                list.push(s as u32 | if far((a, b)) { FAR } else { 0 });
+                list.push(
+                    s as u32
+                        | if ends.far(x, (a, b), thickness) {
+                            FAR
+                        } else {
+                            0
+                        },
+                );
             }
             0
         });
@@ -455,19 +486,12 @@ impl CollisionStage {
             let far = if unmoved {
                 listed & FAR != 0
             } else {
-                let (oa, ob) = (self.nearest[a], self.nearest[b]);
-                let da = if oa == NONE {
-                    self.tracks.reach
-                } else {
-                    self.distance[a]
+                let ends = EndDistances {
+                    nearest: &self.nearest,
+                    distance: &self.distance,
+                    reach: self.tracks.reach,
                 };
-                let db = if ob == NONE {
-                    self.tracks.reach
-                } else {
-                    self.distance[b]
-                };
-                let length = (particles.x[b] - particles.x[a]).length();
-                0.5 * (da + db - length) >= 0.5 * thickness
+                ends.far(&particles.x, (a, b), thickness)
             };
             if far {
                 continue;

@@ -165,11 +165,7 @@ impl CollisionStage {
         let d = x[b] - x[a];
         let limit = springs.rest[s] * factor;
         let len2 = d.length_squared();
-        // Over by more than the slack every limit allows (also false for a
-        // length that is not a number).
-        let slack = limit * (1.0 + LIMIT_SLACK);
-        let over = len2 > slack * slack;
-        if !over || w == 0.0 {
+        if !over_limit(len2, limit) || w == 0.0 {
             return false;
         }
         let len = len2.sqrt();
@@ -227,8 +223,7 @@ impl CollisionStage {
                     // As in `hold_spring` (a spring due for nothing would
                     // be looked at for nothing: the same bits).
                     let limit = springs.rest[s] * factor;
-                    let slack = limit * (1.0 + LIMIT_SLACK);
-                    if (x[b] - x[a]).length_squared() > slack * slack {
+                    if over_limit((x[b] - x[a]).length_squared(), limit) {
                         *bits |= 1 << bit;
                     }
                 }
@@ -303,6 +298,15 @@ impl CollisionStage {
         }
         self.held_before.clear();
     }
+}
+
+/// Whether a spring of squared length `len2` (m²) is over its `limit` (m)
+/// by more than the slack every limit allows (false for a length that is
+/// not a number).
+#[inline]
+fn over_limit(len2: f32, limit: f32) -> bool {
+    let slack = limit * (1.0 + LIMIT_SLACK);
+    len2 > slack * slack
 }
 
 /// Takes away the velocity with which particles `a` and `b` (inverse
