@@ -26,6 +26,7 @@ mod self_intersections;
 mod spatial_hash;
 mod stage;
 mod stretch_hold;
+mod stretch_incidence;
 mod tracks;
 
 pub use contact::{contact, penetration_depth, Contact};

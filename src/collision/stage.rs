@@ -9,7 +9,7 @@ use super::contact_set::{ContactSet, ParticleContact, NONE};
 use super::obstacle::{Obstacle, ObstacleImpulse};
 use super::particle_pass::{BlockOut, BlockScratch, ParticlePass, BLOCK, CONTACT_SLACK};
 use super::response::FrictionPolicy;
-use super::stretch_hold::StretchIncidence;
+use super::stretch_incidence::StretchIncidence;
 use super::tracks::ObstacleTracks;
 use crate::cloth::{Particles, SpringKind, Springs};
 use crate::context::StepContext;

@@ -19,18 +19,6 @@ use crate::cloth::{Particles, SpringKind, Springs};
 use crate::math::Vector;
 use crate::parallel::{Disjoint, Team};
 
-/// The stretch springs at each particle, counted in spring order among the
-/// stretch springs (a particle's in `springs[start[i]..start[i + 1]]`).
-#[derive(Debug, Default)]
-pub(super) struct StretchIncidence {
-    start: Vec<u32>,
-    springs: Vec<u32>,
-    /// Scratch of the filling.
-    fill: Vec<u32>,
-    /// Made this step (for its springs and watch).
-    pub built: bool,
-}
-
 /// Rounds of shortening and pushing out at most; they stop when no spring
 /// near an obstacle is over the limit.
 const ROUNDS: usize = 4;
@@ -236,8 +224,7 @@ impl CollisionStage {
     /// `i` from the `from`th on (counted in spring order among the stretch
     /// springs), those the hold looks at (the watched ones, when `watched`).
     fn mark_due(&mut self, i: usize, from: usize, watched: bool) {
-        let at = &self.stretch_at;
-        for &k in &at.springs[at.start[i] as usize..at.start[i + 1] as usize] {
+        for &k in self.stretch_at.at(i) {
             let k = k as usize;
             if k >= from && (!watched || self.hold_watch[k / 64] >> (k % 64) & 1 != 0) {
                 self.hold_due[k / 64] |= 1 << (k % 64);
@@ -264,31 +251,7 @@ impl CollisionStage {
                 self.hold_watch[k / 64] |= 1 << (k % 64);
             }
         }
-        let at = &mut self.stretch_at;
-        at.built = true;
-        at.start.clear();
-        at.start.resize(n + 1, 0);
-        for s in stretch.clone() {
-            for e in [springs.a[s], springs.b[s]] {
-                at.start[e as usize + 1] += 1;
-            }
-        }
-        for i in 0..n {
-            at.start[i + 1] += at.start[i];
-        }
-        at.springs.clear();
-        at.springs.resize(2 * stretch.len(), 0);
-        // Filled in spring order: each particle's list ascends.
-        let mut next = std::mem::take(&mut at.fill);
-        next.clear();
-        next.extend_from_slice(&at.start[..n]);
-        for (k, s) in stretch.enumerate() {
-            for e in [springs.a[s] as usize, springs.b[s] as usize] {
-                at.springs[next[e] as usize] = k as u32;
-                next[e] += 1;
-            }
-        }
-        at.fill = next;
+        self.stretch_at.build(springs, n);
     }
 
     /// Clears the marks of the particles the stretch hold's last round moved.
