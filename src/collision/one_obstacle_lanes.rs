@@ -143,6 +143,7 @@ impl ParticlePass<'_> {
         if let Some(cache) = &cache {
             assert!(cache.anchor.iter().all(|a| a.len() == n) && cache.listed.len() == n);
         }
+        // Without a cache: no anchor, no list (left so in every batch).
         batch.has_anchor = [cache.is_some() as u32; LANES];
         for chunk in (0..n).step_by(LANES) {
             let count = LANES.min(n - chunk);
@@ -151,17 +152,11 @@ impl ParticlePass<'_> {
             // copies of whole runs.
             copy_run(&mut batch.inv_mass, &inv_mass[lanes.clone()]);
             copy_run(&mut batch.mass, &mass[lanes.clone()]);
-            match &cache {
-                Some(cache) => {
-                    for a in 0..3 {
-                        copy_run(&mut batch.anchor[a], &cache.anchor[a][lanes.clone()]);
-                    }
-                    copy_run(&mut batch.listed, &cache.listed[lanes.clone()]);
+            if let Some(cache) = &cache {
+                for a in 0..3 {
+                    copy_run(&mut batch.anchor[a], &cache.anchor[a][lanes.clone()]);
                 }
-                None => {
-                    batch.anchor = [[0.0; LANES]; 3];
-                    batch.listed = [0; LANES];
-                }
+                copy_run(&mut batch.listed, &cache.listed[lanes.clone()]);
             }
             for lane in 0..count {
                 let k = chunk + lane;

@@ -45,21 +45,19 @@ pub(crate) struct ObstacleTracks {
     /// double precision (for the analytic contacts).
     analytic: Vec<Analytic>,
     poses_f64: Vec<PoseF64>,
-    /// Per particle, from the start of the step: where it was (m), and the
-    /// obstacles whose bounds come within `cache_margin` of there, as
-    /// `cached[cache_start[i]..cache_start[i + 1]]`. While a particle stays
-    /// within the margin of where it was, its candidates are these, no
-    /// broad phase needed.
-    anchors: Vec<Vector>,
+    /// Per particle, from the start of the step: where it was (m; its
+    /// anchor, x, y and z apart), and the obstacles whose bounds come
+    /// within `cache_margin` of there, as
+    /// `cached[cache_start[i]..cache_start[i + 1]]`, with 1 in `listed`
+    /// where that list is not empty. While a particle stays within the
+    /// margin of where it was, its candidates are these, no broad phase
+    /// needed. Structure-of-arrays so that the particle pass's lanes copy
+    /// a batch's at a time (gathering them particle by particle every
+    /// substep was a third of the lanes' gather).
+    anchors: [Vec<f32>; 3],
     cache_start: Vec<u32>,
     cached: Vec<u32>,
     cache_margin: f32,
-    /// The same per particle as structure-of-arrays for the particle
-    /// pass's lanes, made with the cache: the anchors' x, y and z (m), and
-    /// 1 where the particle's list is not empty. Copied a batch at a time,
-    /// where gathering them particle by particle every substep was a third
-    /// of the lanes' gather.
-    anchor_lanes: [Vec<f32>; 3],
     listed: Vec<u32>,
 }
 
@@ -99,10 +97,9 @@ impl ObstacleTracks {
         self.analytic
             .extend(obstacles.iter().map(|o| Analytic::of(&*o.shape)));
         self.place_bounds();
-        self.anchors.clear();
+        self.anchors.iter_mut().for_each(Vec::clear);
         self.cache_start.clear();
         self.cached.clear();
-        self.anchor_lanes.iter_mut().for_each(Vec::clear);
         self.listed.clear();
         self.com.clear();
         self.com_velocity.clear();
@@ -124,8 +121,10 @@ impl ObstacleTracks {
     /// Finds, once for the step, the candidates of every particle at `x`
     /// within `margin` metres of where it is now.
     pub(super) fn cache_candidates(&mut self, x: &[Vector], margin: f32) {
-        self.anchors.clear();
-        self.anchors.extend_from_slice(x);
+        for (a, anchors) in self.anchors.iter_mut().enumerate() {
+            anchors.clear();
+            anchors.extend(x.iter().map(|p| p[a]));
+        }
         self.cache_margin = margin;
         self.cache_start.clear();
         self.cached.clear();
@@ -135,10 +134,6 @@ impl ObstacleTracks {
             self.gather_box(Aabb::new(p - reach, p + reach));
             self.cached.extend_from_slice(&self.candidates);
             self.cache_start.push(self.cached.len() as u32);
-        }
-        for (a, lane) in self.anchor_lanes.iter_mut().enumerate() {
-            lane.clear();
-            lane.extend(x.iter().map(|p| p[a]));
         }
         self.listed.clear();
         self.listed
@@ -151,7 +146,7 @@ impl ObstacleTracks {
     /// when they came from the broad phase instead.
     #[inline]
     pub(super) fn gather_particle(&self, i: usize, point: Vector, out: &mut Vec<u32>) -> bool {
-        let Some(&anchor) = self.anchors.get(i) else {
+        let Some(anchor) = self.anchor(i) else {
             self.gather_box_into(Aabb::new(point, point), out);
             return false;
         };
@@ -188,9 +183,16 @@ impl ObstacleTracks {
     /// was when the step's cache was made (infinite without one).
     #[inline]
     pub(super) fn drift2(&self, i: usize, point: Vector) -> f32 {
-        self.anchors
-            .get(i)
-            .map_or(f32::INFINITY, |&anchor| (point - anchor).length_squared())
+        self.anchor(i)
+            .map_or(f32::INFINITY, |anchor| (point - anchor).length_squared())
+    }
+
+    /// Where particle `i` was when the step's cache was made (m); `None`
+    /// without a cache.
+    #[inline]
+    fn anchor(&self, i: usize) -> Option<Vector> {
+        let [x, y, z] = &self.anchors;
+        Some(Vector::new(*x.get(i)?, *y.get(i)?, *z.get(i)?))
     }
 
     /// The ball's radius (m) when the one obstacle is a ball.
@@ -243,7 +245,7 @@ impl ObstacleTracks {
     /// `None` without a cache.
     #[inline]
     pub(super) fn cache_for(&self, range: std::ops::Range<usize>) -> Option<CacheLanes<'_>> {
-        let [x, y, z] = &self.anchor_lanes;
+        let [x, y, z] = &self.anchors;
         Some(CacheLanes {
             anchor: [
                 x.get(range.clone())?,
@@ -256,7 +258,7 @@ impl ObstacleTracks {
 
     /// True when no cache was made this step.
     pub(super) fn cache_is_empty(&self) -> bool {
-        self.anchors.is_empty()
+        self.anchors[0].is_empty()
     }
 
     /// True when particle `i` has candidates in the step's cache: while it
