@@ -63,6 +63,18 @@ impl<'a, T> Disjoint<'a, T> {
         // alive for 'a, for which the slice is borrowed.
         unsafe { std::slice::from_raw_parts_mut(self.ptr.add(range.start), range.len()) }
     }
+
+    /// The slice's length.
+    pub(crate) fn len(self) -> usize {
+        self.len
+    }
+
+    /// The slice's first element, for kernels that step through it with
+    /// strides (reading or writing through it is `unsafe`: in bounds, and
+    /// only elements no other thread uses meanwhile).
+    pub(crate) fn as_ptr(self) -> *mut T {
+        self.ptr
+    }
 }
 
 /// The threads working together through one step: hand it loops of

@@ -73,6 +73,10 @@ pub struct SceneArgs {
     /// Spring sweeps per substep (xpbd).
     #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
     pub xpbd_iterations: Option<u32>,
+    /// Direct solves of the stretch springs along rows and columns before
+    /// each substep's sweeps (xpbd on a grid; default on).
+    #[arg(long, value_name = "on|off", value_parser = parse_on_off)]
+    pub xpbd_chains: Option<bool>,
 }
 
 impl SceneArgs {
@@ -99,6 +103,7 @@ impl SceneArgs {
                 preconditioner: self.preconditioner,
                 fms_iterations: self.fms_iterations,
                 xpbd_iterations: self.xpbd_iterations,
+                xpbd_chains: self.xpbd_chains,
                 edge_collisions: None,
             },
         }

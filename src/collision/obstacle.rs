@@ -132,6 +132,18 @@ impl Obstacle {
         self.linvel + self.angvel.cross(point - pose.translation)
     }
 
+    /// Whether the shape has edges or corners: anything but a ball, a
+    /// capsule or a half-space (a plane). Over an edge a contact pushes the
+    /// cloth out along a normal that turns sharply from one particle to the
+    /// next, which short substeps must follow.
+    pub fn has_edges(&self) -> bool {
+        use parry3d::shape::ShapeType;
+        !matches!(
+            self.shape.shape_type(),
+            ShapeType::Ball | ShapeType::Capsule | ShapeType::HalfSpace
+        )
+    }
+
     /// World bounding box of the obstacle over `[0, dt]` of the step.
     pub fn swept_aabb(&self, dt: f32) -> Aabb {
         let swept = self.shape.compute_swept_aabb(&self.pose, &self.pose_at(dt));

@@ -54,6 +54,8 @@ pub struct SolverTuning {
     pub fms_iterations: Option<u32>,
     /// Spring sweeps per substep of the small-steps (XPBD) solver.
     pub xpbd_iterations: Option<u32>,
+    /// Direct solves along rows and columns in the small-steps solver.
+    pub xpbd_chains: Option<bool>,
     /// Keep stretch and shear springs out of obstacles too.
     pub edge_collisions: Option<bool>,
     /// Let a still cloth sleep.
@@ -118,6 +120,9 @@ impl SceneDesc {
         }
         if let Some(it) = tuning.xpbd_iterations {
             settings.xpbd_iterations = it;
+        }
+        if let Some(on) = tuning.xpbd_chains {
+            settings.xpbd_chains = on;
         }
         if let Some(edges) = tuning.edge_collisions {
             settings.edge_collisions = edges;

@@ -59,7 +59,7 @@ impl Lanes {
     }
 
     /// The arrays, to write: x, y, z, start x, y, z, w.
-    fn arrays_mut(&mut self) -> [&mut [f32]; 7] {
+    pub(super) fn arrays_mut(&mut self) -> [&mut [f32]; 7] {
         let mut arrays = self.0.all_mut();
         std::array::from_fn(|_| arrays.next().expect("seven arrays"))
     }
@@ -117,6 +117,8 @@ struct Pass {
 /// both diagonals, bend two apart along rows and columns).
 #[derive(Debug, Clone)]
 pub(crate) struct GridPlan {
+    /// Columns and rows of the grid.
+    shape: (usize, usize),
     /// The lane of each particle.
     lane: Vec<u32>,
     passes: Vec<Pass>,
@@ -366,6 +368,7 @@ impl GridPlan {
             span
         });
         Some(GridPlan {
+            shape: (cols, rows),
             lane,
             passes,
             phases,
@@ -382,6 +385,22 @@ impl GridPlan {
     #[cfg(test)]
     pub fn lane(&self, i: usize) -> usize {
         self.lane[i] as usize
+    }
+
+    /// Columns and rows of the grid.
+    pub fn shape(&self) -> (usize, usize) {
+        self.shape
+    }
+
+    /// The stretch springs along rows and along columns: the rest length
+    /// (m) of the one leaving each lane (0 where none does), and its
+    /// multiplier (N·s²), for the chain solves (`grid_chains.rs`).
+    pub fn stretch_passes(&mut self) -> ([&[f32]; 2], [&mut [f32]; 2]) {
+        let rest = [self.rest.get(0), self.rest.get(1)];
+        let mut lambda = self.lambda.all_mut();
+        let rows = lambda.next().expect("the stretch springs along rows");
+        let cols = lambda.next().expect("the stretch springs along columns");
+        (rest, [rows, cols])
     }
 
     /// The lanes of the particles `range` (whole rows: each in `range` too).

@@ -9,6 +9,7 @@ mod fast_mass_spring;
 mod filter;
 mod general_sweep;
 mod global_matrix;
+mod grid_chains;
 mod grid_sweep;
 mod implicit_euler;
 mod integrate;

@@ -43,6 +43,13 @@ pub struct SolverSettings {
     /// collision work.
     #[serde(deserialize_with = "crate::error::de::at_least_one")]
     pub xpbd_iterations: u32,
+    /// Before each substep's sweeps, solve the stretch springs of every
+    /// row and every column of a grid cloth directly, one tridiagonal
+    /// solve a row or column (`grid_chains.rs`): a correction then crosses
+    /// the cloth in one substep, and the automatic substeps are about a
+    /// fifth as many (12 instead of 55 for the drape at N = 64). No effect
+    /// on cloth that is not a whole grid (a mesh, a torn grid).
+    pub xpbd_chains: bool,
     /// Also keep stretch and shear springs (not only particles) out of obstacles,
     /// so cloth cannot cut through edges and corners.
     pub edge_collisions: bool,
@@ -66,6 +73,7 @@ impl Default for SolverSettings {
             preconditioner: Preconditioner::BlockJacobi,
             fms_iterations: 10,
             xpbd_iterations: 2,
+            xpbd_chains: true,
             edge_collisions: true,
             parallel: true,
             sleep: false,

@@ -1,7 +1,9 @@
 //! Stability limits of the explicit integrators: the largest substep each
 //! takes on a cloth, from Gershgorin bounds on its stiffness and damping.
 
+use super::grid_chains;
 use super::integrator::Integrator;
+use super::settings::SolverSettings;
 use crate::cloth::{Cloth, SpringKind};
 
 /// Upper bounds on the squared highest angular frequency (1/s²) and on the
@@ -76,10 +78,31 @@ fn spring_sums(cloth: &Cloth, degree: &[u32; 3]) -> (f32, f32) {
 /// instead of 69 (BENCHMARKS.md, thirteenth session).
 const XPBD_REACH: f32 = 1.25;
 
-/// The largest substep (seconds) at which `integrator` is estimated to be
-/// stable on this cloth (for the small-steps solver, which is stable at any
-/// step: the substep at which its springs keep their stiffness).
-pub fn stable_substep(cloth: &Cloth, integrator: Integrator) -> f32 {
+/// [`XPBD_REACH`] when the direct solves along rows and columns run before
+/// the sweeps (`grid_chains.rs`): they carry a correction across the cloth
+/// in one substep, so the substep no longer limits how far one travels.
+/// The drape's peak stretch over every frame at the substeps this gives
+/// (BENCHMARKS.md, sixteenth session): 4.56% with 12 at N = 64 (8 gave
+/// 5.95%), 4.90% with 24 at N = 128 (20 gave 5.28%).
+const XPBD_CHAIN_REACH: f32 = 5.7;
+
+/// Automatic substeps a second at least with the chain solves: 16 a frame
+/// at 60 Hz (self-collision's [`super::MAX_SELF_SUBSTEP`] too). Where the
+/// stretch comes from contacts rather than from the cloth's weight, the
+/// chains do not carry it away, and the substep sets it. Measured, peak
+/// stretch over every frame: the drape at N = 48 in a cotton with half the
+/// stretch stiffness (`tests/stretch_limit.rs`) 5.09% at 12 substeps, 4.89%
+/// at 16 (4.76% at the sweeps' own 31); the curtain pushed by its
+/// kinematic ball 6.7% at 8, 5.8% at 12, 5.5% at 16 (5.0% at the sweeps'
+/// 34); the `pins` sheet 5.6% at 7, 4.9% at 12.
+const XPBD_CHAIN_SUBSTEPS_PER_SECOND: f32 = 960.0;
+
+/// The largest substep (seconds) at which the integrator of `settings` is
+/// estimated to be stable on this cloth (for the small-steps solver, which
+/// is stable at any step: the substep at which its springs keep their
+/// stiffness; longer when its direct solves along rows and columns apply).
+pub fn stable_substep(cloth: &Cloth, settings: &SolverSettings) -> f32 {
+    let integrator = settings.integrator;
     let (omega2, gamma) = stiffness_bounds(cloth);
     if omega2 <= 0.0 {
         return f32::INFINITY;
@@ -96,7 +119,11 @@ pub fn stable_substep(cloth: &Cloth, integrator: Integrator) -> f32 {
         // Stable at any step; the stiffness converges with the substeps.
         // Damping takes no substeps here: the sweep treats it implicitly,
         // with the springs (a heavily damped cloth steps as fast as a light one).
-        Integrator::Xpbd => XPBD_REACH * 2.0 / bulk_stiffness(cloth).sqrt(),
+        Integrator::Xpbd => {
+            let chains = settings.xpbd_chains && grid_chains::apply_to(cloth);
+            let reach = if chains { XPBD_CHAIN_REACH } else { XPBD_REACH };
+            reach * 2.0 / bulk_stiffness(cloth).sqrt()
+        }
         Integrator::ExplicitEuler => {
             let ratio = SpringKind::ALL
                 .iter()
@@ -117,10 +144,17 @@ pub fn stable_substep(cloth: &Cloth, integrator: Integrator) -> f32 {
     safety * h
 }
 
-/// The substeps that keep `integrator` within its stability limit for a frame step `dt`.
-pub fn stable_substeps(cloth: &Cloth, integrator: Integrator, dt: f32) -> u32 {
-    let h = stable_substep(cloth, integrator);
-    let k = (dt / h).ceil();
+/// The substeps that keep the integrator of `settings` within its
+/// stability limit for a frame step `dt` (with the small-steps solver's
+/// chain solves, at least 960 a second).
+pub fn stable_substeps(cloth: &Cloth, settings: &SolverSettings, dt: f32) -> u32 {
+    let h = stable_substep(cloth, settings);
+    let mut k = (dt / h).ceil();
+    let chains = settings.xpbd_chains && grid_chains::apply_to(cloth);
+    if settings.integrator == Integrator::Xpbd && chains {
+        // A thousandth below: 1/60 s at 960 a second is 16, not 17.
+        k = k.max((dt * XPBD_CHAIN_SUBSTEPS_PER_SECOND - 1.0e-3).ceil());
+    }
     if k.is_finite() {
         k.clamp(1.0, 1.0e6) as u32
     } else {

@@ -25,6 +25,7 @@ use crate::math::Vector;
 use crate::parallel::Disjoint;
 
 use super::general_sweep::{self, PackedParticles};
+use super::grid_chains::ChainScratch;
 use super::grid_sweep::{limit_stretch, sweep, Compliance, GridPlan, Lanes};
 use super::strain_limit;
 use super::substep::Substep;
@@ -46,6 +47,8 @@ pub(crate) struct XpbdScratch {
     lambda: Vec<f32>,
     /// The particles packed for the general sweep (`general_sweep.rs`).
     general: PackedParticles,
+    /// Scratch of the direct solves along rows and columns (`grid_chains.rs`).
+    chains: ChainScratch,
 }
 
 /// What a grid plan depends on: the grid, and which springs (their storage,
@@ -108,6 +111,7 @@ pub(crate) fn step(
         if ws.planned_for != Some(key) {
             ws.plan = GridPlan::new(grid, model.springs);
             ws.planned_for = Some(key);
+            ws.chains.replanned();
         }
     }
     match (&mut ws.plan, sub.grid) {
@@ -142,6 +146,10 @@ pub(crate) fn step(
                     lw[lane] = w[k];
                 }
             });
+            if sub.settings.xpbd_chains {
+                let alpha = compliance[0].alpha;
+                ws.chains.solve(plan, l, (alpha, sub.mass_revision), team);
+            }
             for _ in 0..sub.settings.xpbd_iterations {
                 sweep(plan, l, &compliance, team);
             }

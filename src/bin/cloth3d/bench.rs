@@ -43,6 +43,10 @@ pub struct BenchArgs {
     /// Spring sweeps per substep of the small-steps solver (xpbd).
     #[arg(long, value_parser = parse_iterations, allow_hyphen_values = true)]
     pub xpbd_iterations: Option<u32>,
+    /// Direct solves along rows and columns in the small-steps solver
+    /// (xpbd on a grid; default on).
+    #[arg(long, value_name = "on|off", value_parser = parse_on_off)]
+    pub xpbd_chains: Option<bool>,
     /// Skip rapier's built-in cloth.
     #[arg(long)]
     pub no_rapier: bool,
@@ -117,6 +121,7 @@ fn bench_rows(args: &BenchArgs, pools: &[Threads]) -> ExitCode {
         substeps: args.substeps,
         solver: SolverTuning {
             xpbd_iterations: args.xpbd_iterations,
+            xpbd_chains: args.xpbd_chains,
             ..Default::default()
         },
         ..Default::default()

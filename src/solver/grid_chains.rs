@@ -1,0 +1,630 @@
+//! Direct solves of a grid cloth's stretch springs along its rows and its
+//! columns, before each substep's Gauss–Seidel sweeps (`xpbd.rs`).
+//!
+//! Why: a sweep carries a correction one spring a substep, so a sweep-only
+//! solver needs substeps in proportion to the cloth's size before a
+//! hanging sheet stops stretching (55 at N = 64, 109 at N = 128 in the
+//! drape). The stretch springs of one row form a chain; linearised at the
+//! predicted positions, XPBD's system for one chain,
+//! `(J W Jᵀ + α) Δλ = −C`, is tridiagonal and solved exactly in one
+//! forward and one backward pass (the Thomas algorithm). One solve of
+//! every row, then of every column, carries a correction across the whole
+//! cloth in one substep; the sweeps that follow take the shear and bend
+//! springs, the damping and what the linearisation missed. The spike that
+//! led here (BENCHMARKS.md, "A spike: direct solves along rows and
+//! columns") held the drape's peak under 5% with 12 substeps at N = 64 and
+//! 24 at N = 128.
+//!
+//! Layout: chains are lanes. A column chain runs down the rows of the
+//! sweep's lanes (`grid_sweep::Lanes`), a lane of each row, so the columns
+//! are solved side by side, a vector of chains a step, with no gather. The
+//! rows are first copied into a transposed scratch where they are columns,
+//! solved the same way, and copied back. Chains are independent: they are
+//! cut into chunks of [`CHUNK`] lanes that threads take in any order, with
+//! the bits of one thread; no fused multiply-add, so the AVX2 build and the
+//! baseline give the same bits too.
+
+use crate::cloth::{Cloth, SpringKind};
+use crate::math::simd_available;
+use crate::parallel::{Disjoint, Team};
+
+use super::grid_sweep::{GridPlan, Lanes};
+use super::staggered::Staggered;
+
+/// Chains a chunk solves side by side (four AVX2 vectors): small enough
+/// that a 128-column grid gives two threads two chunks each.
+const CHUNK: usize = 32;
+
+/// Below this many springs in a direction, its chunks run on one thread.
+const PARALLEL_MIN_SPRINGS: usize = 4096;
+
+/// Scratch of the chain solves.
+#[derive(Debug, Default)]
+pub(crate) struct ChainScratch {
+    /// Per chain element: the spring's unit direction (x, y, z), then the
+    /// forward pass's eliminated super-diagonal and right-hand side.
+    work: Staggered,
+    /// The rows transposed (lane `c · rows + r` holds particle `(r, c)`):
+    /// x, y, z, inverse mass, the rest length (m) of the row's stretch
+    /// spring leaving it, and that spring's multiplier (N·s²).
+    rows: Staggered,
+    /// The column of each lane of a row.
+    column: Vec<u32>,
+    /// The mass revision the transposed inverse masses and rest lengths
+    /// were copied at (`None`: not since the plan or the shape changed).
+    constants_for: Option<u64>,
+    /// The grid's shape (columns, rows) the scratch was made for.
+    shape: Option<(usize, usize)>,
+}
+
+/// Slots of the transposed arrays.
+const TX: usize = 0;
+const TY: usize = 1;
+const TZ: usize = 2;
+const TW: usize = 3;
+const TREST: usize = 4;
+const TLAMBDA: usize = 5;
+
+/// One set of chains side by side: chain `j` has elements `k · stride + j`
+/// for `k` in `0..len`, and the spring from element `k` to `k + 1` has its
+/// rest length and multiplier at element `k`.
+#[derive(Clone, Copy)]
+struct Chains<'a> {
+    x: Disjoint<'a, f32>,
+    y: Disjoint<'a, f32>,
+    z: Disjoint<'a, f32>,
+    w: &'a [f32],
+    rest: &'a [f32],
+    lambda: Disjoint<'a, f32>,
+    /// Scratch: direction x, y, z, eliminated super-diagonal, right-hand side.
+    work: [Disjoint<'a, f32>; 5],
+    len: usize,
+    stride: usize,
+    /// Compliance (`1/(k h²)`).
+    alpha: f32,
+}
+
+impl ChainScratch {
+    /// One direct solve of every row's stretch chain, then of every
+    /// column's, on the lanes' positions, with compliance `alpha`
+    /// (`1/(k h²)`); the multipliers go into the plan's stretch passes, so
+    /// that the sweeps after go on from them. `revision`: the cloth's mass
+    /// revision (the inverse masses are copied again when it changes).
+    pub fn solve(
+        &mut self,
+        plan: &mut GridPlan,
+        lanes: &mut Lanes,
+        (alpha, revision): (f32, u64),
+        team: Team,
+    ) {
+        self.solve_with(plan, lanes, (alpha, revision), team, simd_available());
+    }
+
+    /// [`Self::solve`], with the AVX2 kernel only when `simd`.
+    fn solve_with(
+        &mut self,
+        plan: &mut GridPlan,
+        lanes: &mut Lanes,
+        (alpha, revision): (f32, u64),
+        team: Team,
+        simd: bool,
+    ) {
+        let (cols, rows) = plan.shape();
+        if cols < 2 || rows < 2 {
+            return;
+        }
+        let n = cols * rows;
+        if self.shape != Some((cols, rows)) {
+            self.rows = Staggered::new(6, n, 7);
+            self.work = Staggered::new(5, n, 13);
+            self.column.clear();
+            self.column.resize(cols, 0);
+            for (c, &lane) in plan.lanes_of(&(0..cols)).iter().enumerate() {
+                self.column[lane as usize] = c as u32;
+            }
+            self.constants_for = None;
+            self.shape = Some((cols, rows));
+        }
+        let column = &self.column[..];
+        let ([rest_rows, rest_cols], [lambda_rows, lambda_cols]) = plan.stretch_passes();
+        let [lx, ly, lz, _, _, _, lw] = lanes.disjoint();
+        let mut t = self.rows.all_mut().map(Disjoint::new);
+        let t: [Disjoint<f32>; 6] = std::array::from_fn(|_| t.next().expect("six"));
+        let work = {
+            let mut w = self.work.all_mut().map(Disjoint::new);
+            std::array::from_fn(|_| w.next().expect("five"))
+        };
+        let team_t = team_for(team, n);
+        let shape = (cols, rows);
+        // Rows: into the transposed scratch. Inverse masses and rest
+        // lengths only when the masses or the plan changed.
+        let constants = self.constants_for != Some(revision);
+        self.constants_for = Some(revision);
+        // SAFETY: the lanes are only read until the rows are solved; each
+        // chunk of lanes along a row writes its own columns' scratch.
+        unsafe {
+            let [x, y, z, w] = [lx, ly, lz, lw].map(|d| &*d.range(0..n));
+            let pairs = [
+                (x, t[TX]),
+                (y, t[TY]),
+                (z, t[TZ]),
+                (w, t[TW]),
+                (rest_rows, t[TREST]),
+            ];
+            transpose_in(
+                &pairs[..if constants { 5 } else { 3 }],
+                column,
+                shape,
+                team_t,
+            );
+        }
+        // SAFETY: the multipliers' scratch is this thread's alone here.
+        unsafe { t[TLAMBDA].range(0..n) }.fill(0.0);
+        // SAFETY: inverse masses and rest lengths are only read from here on.
+        let (tw, trest) = unsafe { (&*t[TW].range(0..n), &*t[TREST].range(0..n)) };
+        let chains = Chains {
+            x: t[TX],
+            y: t[TY],
+            z: t[TZ],
+            w: tw,
+            rest: trest,
+            lambda: t[TLAMBDA],
+            work,
+            len: cols,
+            stride: rows,
+            alpha,
+        };
+        solve_all(chains, rows, team, simd);
+        // Back into the lanes, a chunk of rows a thread.
+        // SAFETY: the scratch is only read now; each chunk of rows writes
+        // its own rows' lanes.
+        unsafe {
+            let lambda_rows = Disjoint::new(lambda_rows);
+            let [x, y, z, lambda] = [TX, TY, TZ, TLAMBDA].map(|a| &*t[a].range(0..n));
+            let pairs = [(x, lx), (y, ly), (z, lz), (lambda, lambda_rows)];
+            transpose_out(&pairs, column, shape, team_t);
+        }
+        // Columns: in place, down the rows of the lanes.
+        // SAFETY: inverse masses are only read.
+        let w = unsafe { &*lw.range(0..n) };
+        let chains = Chains {
+            x: lx,
+            y: ly,
+            z: lz,
+            w,
+            rest: rest_cols,
+            lambda: Disjoint::new(lambda_cols),
+            work,
+            len: rows,
+            stride: cols,
+            alpha,
+        };
+        solve_all(chains, cols, team, simd);
+    }
+
+    /// Forgets the copied inverse masses and rest lengths (a new plan).
+    pub fn replanned(&mut self) {
+        self.constants_for = None;
+    }
+}
+
+/// Side of the tiles the transposes copy: a tile's rows of lanes and of
+/// scratch stay in the first-level cache.
+const TILE: usize = 8;
+
+/// Copies each pair's lanes (row-major, `shape` = (columns, rows), lanes
+/// of a row in the plan's order) into its scratch (column-major), a chunk
+/// of lanes along the rows a thread, in tiles of [`TILE`] rows.
+///
+/// # Safety
+/// The scratch arrays are used by no one else meanwhile, and the lane
+/// arrays not written; all `columns · rows` long.
+unsafe fn transpose_in(
+    pairs: &[(&[f32], Disjoint<f32>)],
+    column: &[u32],
+    (cols, rows): (usize, usize),
+    team: Team,
+) {
+    let n = cols * rows;
+    assert!(pairs.iter().all(|(a, b)| a.len() >= n && b.len() >= n) && column.len() == cols);
+    team.sum_count(cols.div_ceil(CHUNK), |q| {
+        let lanes = q * CHUNK..((q + 1) * CHUNK).min(cols);
+        for r0 in (0..rows).step_by(TILE) {
+            let r1 = (r0 + TILE).min(rows);
+            for &(from, to) in pairs {
+                let (from, to) = (from.as_ptr(), to.as_ptr());
+                for p in lanes.clone() {
+                    let c = column[p] as usize;
+                    for r in r0..r1 {
+                        // SAFETY: within both arrays (asserted); lane
+                        // `p`'s scratch row is this chunk's alone.
+                        unsafe { *to.add(c * rows + r) = *from.add(r * cols + p) };
+                    }
+                }
+            }
+        }
+        0
+    });
+}
+
+/// The inverse of [`transpose_in`]: each pair's scratch back into its
+/// lanes, a chunk of rows a thread.
+///
+/// # Safety
+/// As for [`transpose_in`], the roles swapped.
+unsafe fn transpose_out(
+    pairs: &[(&[f32], Disjoint<f32>)],
+    column: &[u32],
+    (cols, rows): (usize, usize),
+    team: Team,
+) {
+    let n = cols * rows;
+    assert!(pairs.iter().all(|(a, b)| a.len() >= n && b.len() >= n) && column.len() == cols);
+    team.sum_count(rows.div_ceil(CHUNK), |q| {
+        let rs = q * CHUNK..((q + 1) * CHUNK).min(rows);
+        for &(from, to) in pairs {
+            let (from, to) = (from.as_ptr(), to.as_ptr());
+            for (p, &c) in column.iter().enumerate() {
+                let c = c as usize;
+                for r in rs.clone() {
+                    // SAFETY: within both arrays (asserted); row `r`'s
+                    // lanes are this chunk's alone.
+                    unsafe { *to.add(r * cols + p) = *from.add(c * rows + r) };
+                }
+            }
+        }
+        0
+    });
+}
+
+/// The team for `springs` springs: alone when they are few.
+fn team_for(team: Team, springs: usize) -> Team {
+    if springs >= PARALLEL_MIN_SPRINGS {
+        team
+    } else {
+        Team::ALONE
+    }
+}
+
+/// Solves the `width` chains of `chains`, a chunk at a time.
+fn solve_all(chains: Chains, width: usize, team: Team, simd: bool) {
+    let total = chains.len * chains.stride;
+    let arrays = [chains.x, chains.y, chains.z, chains.lambda];
+    assert!(width <= chains.stride && chains.len >= 2);
+    assert!(
+        arrays.iter().all(|a| a.len() >= total) && chains.work.iter().all(|a| a.len() >= total)
+    );
+    assert!(chains.w.len() >= total && chains.rest.len() >= total);
+    let chunks = width.div_ceil(CHUNK);
+    team_for(team, width * chains.len).sum_count(chunks, |q| {
+        let j = q * CHUNK..((q + 1) * CHUNK).min(width);
+        #[cfg(target_arch = "x86_64")]
+        if simd {
+            // SAFETY: `simd` only when the CPU has AVX2; chunks are
+            // disjoint sets of chains, within the arrays (asserted).
+            unsafe { solve_chunk_avx2(&chains, j) };
+            return 0;
+        }
+        let _ = simd;
+        // SAFETY: as above.
+        unsafe { solve_chunk(&chains, j) };
+        0
+    });
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn solve_chunk_avx2(chains: &Chains, j: std::ops::Range<usize>) {
+    // SAFETY: the caller's promise.
+    unsafe { solve_chunk(chains, j) };
+}
+
+/// Chains `j`: vectors of [`LANES`] chains, then one at a time.
+///
+/// # Safety
+/// Chains `j` lie within the arrays, and no other thread touches them meanwhile.
+#[inline(always)]
+unsafe fn solve_chunk(chains: &Chains, j: std::ops::Range<usize>) {
+    let mut at = j.start;
+    while at + LANES <= j.end {
+        // SAFETY: the caller's promise.
+        unsafe { solve_group::<LANES>(chains, at) };
+        at += LANES;
+    }
+    while at < j.end {
+        // SAFETY: the caller's promise.
+        unsafe { solve_group::<1>(chains, at) };
+        at += 1;
+    }
+}
+
+/// Chains a vector holds (AVX2's 8 `f32`).
+const LANES: usize = 8;
+
+/// Loads `M` floats at `p + at`.
+///
+/// # Safety
+/// In bounds, and not written by another thread meanwhile.
+#[inline(always)]
+unsafe fn load<const M: usize>(p: *const f32, at: usize) -> [f32; M] {
+    // SAFETY: the caller's promise; `[f32; M]` has the alignment of `f32`.
+    unsafe { p.add(at).cast::<[f32; M]>().read() }
+}
+
+/// Stores `M` floats at `p + at`.
+///
+/// # Safety
+/// As for [`load`], and used by no other thread meanwhile.
+#[inline(always)]
+unsafe fn store<const M: usize>(p: *mut f32, at: usize, v: [f32; M]) {
+    // SAFETY: the caller's promise.
+    unsafe { p.add(at).cast::<[f32; M]>().write(v) }
+}
+
+/// The Thomas algorithm on the `M` chains from `j`, side by side: the
+/// forward pass eliminates each spring's coupling to the one before (the
+/// particle they share: `−w (n_{k−1} · n_k)`), the backward pass finds the
+/// multipliers from the last spring back and moves both ends of each
+/// spring by them. Each lane does the same operations in the same order
+/// whatever `M`, so the bits do not depend on how chains are grouped.
+///
+/// # Safety
+/// As for [`solve_chunk`].
+#[inline(always)]
+unsafe fn solve_group<const M: usize>(c: &Chains, j: usize) {
+    let alpha = c.alpha;
+    let s = c.stride;
+    let m = c.len - 1;
+    let [x, y, z, lambda] = [c.x, c.y, c.z, c.lambda].map(|a| a.as_ptr());
+    let [nxp, nyp, nzp, cpp, dpp] = c.work.map(|a| a.as_ptr());
+    let (w, rest) = (c.w.as_ptr(), c.rest.as_ptr());
+    // SAFETY (every load and store below): element `k · s + j .. + M` for
+    // `k < len` is within the arrays and belongs to these chains only.
+    unsafe {
+        // Forward. The spring before the first is taken as none: its
+        // direction 0 couples nothing.
+        let (mut pn, mut pinv, mut pdp) = ([[0.0f32; M]; 3], [0.0f32; M], [0.0f32; M]);
+        let mut a = [load::<M>(x, j), load(y, j), load(z, j), load(w, j)];
+        for k in 0..m {
+            let (ka, kb) = (k * s + j, (k + 1) * s + j);
+            let b = [load::<M>(x, kb), load(y, kb), load(z, kb), load(w, kb)];
+            let r = load::<M>(rest, ka);
+            let (mut n, mut sup, mut inv, mut dp) =
+                ([[0.0f32; M]; 3], [0.0f32; M], [0.0f32; M], [0.0f32; M]);
+            for i in 0..M {
+                let (dx, dy, dz) = (b[0][i] - a[0][i], b[1][i] - a[1][i], b[2][i] - a[2][i]);
+                let l = (dx * dx + dy * dy + dz * dz).sqrt();
+                let inv_l = if l > 0.0 { 1.0 / l } else { 0.0 };
+                let (ux, uy, uz) = (dx * inv_l, dy * inv_l, dz * inv_l);
+                (n[0][i], n[1][i], n[2][i]) = (ux, uy, uz);
+                let stretch = if r[i] > 0.0 { l - r[i] } else { 0.0 };
+                let off = -a[3][i] * (pn[0][i] * ux + pn[1][i] * uy + pn[2][i] * uz);
+                sup[i] = off * pinv[i];
+                let pivot = a[3][i] + b[3][i] + alpha - off * sup[i];
+                inv[i] = if pivot > 0.0 { 1.0 / pivot } else { 0.0 };
+                dp[i] = (-stretch - off * pdp[i]) * inv[i];
+            }
+            if k > 0 {
+                store(cpp, ka - s, sup);
+            }
+            store(nxp, ka, n[0]);
+            store(nyp, ka, n[1]);
+            store(nzp, ka, n[2]);
+            store(dpp, ka, dp);
+            (pn, pinv, pdp, a) = (n, inv, dp, b);
+        }
+        // Backward, from the last spring (nothing after it), each row's
+        // positions kept in registers between the two springs that move it.
+        let mut next = [0.0f32; M];
+        let mut b = a; // the last row, as the forward pass left it
+        for k in (0..m).rev() {
+            let ka = k * s + j;
+            let mut a = [load::<M>(x, ka), load(y, ka), load(z, ka), load(w, ka)];
+            let n = [load::<M>(nxp, ka), load(nyp, ka), load(nzp, ka)];
+            let dp = load::<M>(dpp, ka);
+            let cp = if k + 1 < m {
+                load::<M>(cpp, ka)
+            } else {
+                [0.0; M]
+            };
+            let mut lam = load::<M>(lambda, ka);
+            for i in 0..M {
+                let d = dp[i] - cp[i] * next[i];
+                next[i] = d;
+                lam[i] += d;
+                let (da, db) = (a[3][i] * d, b[3][i] * d);
+                for e in 0..3 {
+                    a[e][i] -= n[e][i] * da;
+                    b[e][i] += n[e][i] * db;
+                }
+            }
+            store(lambda, ka, lam);
+            let kb = ka + s;
+            store(x, kb, b[0]);
+            store(y, kb, b[1]);
+            store(z, kb, b[2]);
+            b = a;
+        }
+        store(x, j, b[0]);
+        store(y, j, b[1]);
+        store(z, j, b[2]);
+    }
+}
+
+/// True when the chain solves apply to `cloth`: it is a whole grid, with
+/// every spring of the grid's six families (the grid sweep's plan then
+/// exists; `GridPlan::new` checks each spring, this only counts them).
+pub(crate) fn apply_to(cloth: &Cloth) -> bool {
+    let Some(grid) = cloth.grid() else {
+        return false;
+    };
+    let (c, r) = (grid.cols, grid.rows);
+    if c < 2 || r < 2 {
+        return false;
+    }
+    let springs = cloth.springs();
+    let count = |kind| springs.range(kind).len();
+    let full = [
+        (c - 1) * r + c * (r - 1),
+        2 * (c - 1) * (r - 1),
+        c.saturating_sub(2) * r + c * r.saturating_sub(2),
+    ];
+    [SpringKind::Stretch, SpringKind::Shear, SpringKind::Bend].map(count) == full
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloth::ClothBuilder;
+    use crate::math::Vector;
+
+    /// A grid cloth of `cols` × `rows` at `x(i)`, inverse masses `w(i)`,
+    /// as a plan and lanes.
+    fn setup(
+        (cols, rows): (usize, usize),
+        x: impl Fn(usize, Vector) -> Vector,
+        w: impl Fn(usize) -> f32,
+    ) -> (Cloth, GridPlan, Lanes) {
+        let cloth = ClothBuilder::new(cols, rows).build().unwrap();
+        let plan = GridPlan::new(cloth.grid().unwrap(), cloth.springs()).unwrap();
+        let mut lanes = Lanes::default();
+        lanes.resize(cols * rows);
+        let [lx, ly, lz, sx, sy, sz, lw] = lanes.arrays_mut();
+        for (i, &p) in cloth.positions().iter().enumerate() {
+            let lane = plan.lanes_of(&(i..i + 1))[0] as usize;
+            let q = x(i, p);
+            (lx[lane], ly[lane], lz[lane]) = (q.x, q.y, q.z);
+            (sx[lane], sy[lane], sz[lane]) = (p.x, p.y, p.z);
+            lw[lane] = w(i);
+        }
+        (cloth, plan, lanes)
+    }
+
+    /// The lanes' positions in particle order.
+    fn positions(plan: &GridPlan, lanes: &mut Lanes) -> Vec<Vector> {
+        let n = lanes.arrays_mut()[0].len();
+        let [x, y, z, ..] = lanes.arrays_mut();
+        let lane = plan.lanes_of(&(0..n));
+        lane.iter()
+            .map(|&l| Vector::new(x[l as usize], y[l as usize], z[l as usize]))
+            .collect()
+    }
+
+    /// Each stretch spring's length over its rest length, less 1.
+    fn strains(cloth: &Cloth, x: &[Vector]) -> Vec<f32> {
+        let s = cloth.springs();
+        let (a, b) = s.endpoints();
+        s.range(SpringKind::Stretch)
+            .map(|k| (x[b[k] as usize] - x[a[k] as usize]).length() / s.rest_lengths()[k] - 1.0)
+            .collect()
+    }
+
+    #[test]
+    fn a_sheet_stretched_evenly_comes_back_to_rest_in_one_solve() {
+        // Straight rows and columns, 10% too long, stiff springs, masses
+        // that differ from row to row only (so that the columns' solve
+        // moves every column alike and the rows stay straight): along a
+        // straight chain the linearised system is the exact one, so one
+        // solve of the rows and one of the columns put every stretch spring
+        // at its rest length. (Gauss–Seidel would need about as many
+        // sweeps as the chains have springs.)
+        let stretched = |_, p: Vector| Vector::new(p.x * 1.1, p.y, p.z * 1.1);
+        let (cloth, mut plan, mut lanes) = setup((13, 9), stretched, |i| 1.0 + (i / 13 % 3) as f32);
+        let before = strains(&cloth, &positions(&plan, &mut lanes));
+        assert!(before.iter().all(|&e| (e - 0.1).abs() < 1e-4), "{before:?}");
+        ChainScratch::default().solve(&mut plan, &mut lanes, (0.0, 1), Team::ALONE);
+        let after = strains(&cloth, &positions(&plan, &mut lanes));
+        let worst = after.iter().fold(0.0f32, |m, e| m.max(e.abs()));
+        assert!(worst < 1e-5, "a spring left {worst} off its rest length");
+    }
+
+    #[test]
+    fn one_spring_moves_as_xpbd_says() {
+        // A 2 × 2 grid: each row and column one spring. Along the first
+        // row, a spring 0.1 m too long with ends of inverse masses 1 and 3
+        // and compliance 2: Δλ = −C / (w_a + w_b + α) = −0.1 / 6, the ends
+        // move by w Δλ along it.
+        // The second row alike, so that the columns stay as they were.
+        let moved = |i: usize, p: Vector| if i % 2 == 1 { p + Vector::X * 0.1 } else { p };
+        let w = |i: usize| [1.0, 3.0, 1.0, 3.0][i];
+        let (cloth, mut plan, mut lanes) = setup((2, 2), moved, w);
+        let start = cloth.positions().to_vec();
+        let spacing = (start[1] - start[0]).length();
+        assert!(spacing > 0.1 && (start[1] - start[0]).dot(Vector::X) == spacing);
+        ChainScratch::default().solve(&mut plan, &mut lanes, (2.0, 1), Team::ALONE);
+        let x = positions(&plan, &mut lanes);
+        let dl = -0.1f32 / 6.0;
+        assert!(
+            (x[0] - (start[0] - Vector::X * dl)).length() < 1e-6,
+            "{:?}",
+            x[0]
+        );
+        assert!(
+            (x[1] - (start[1] + Vector::X * (0.1 + 3.0 * dl))).length() < 1e-6,
+            "{:?}",
+            x[1]
+        );
+        let first = plan.lanes_of(&(0..1))[0] as usize;
+        let (_, [lambda_rows, _]) = plan.stretch_passes();
+        assert!(
+            (lambda_rows[first] - dl).abs() < 1e-7,
+            "{}",
+            lambda_rows[first]
+        );
+    }
+
+    #[test]
+    fn every_path_gives_the_same_bits() {
+        // 21 columns and 70 rows, jittered, a few pinned: vectors and a
+        // scalar tail along both directions, several chunks for threads.
+        let jitter = |i: usize, p: Vector| {
+            let j = (i as f32 * 0.37).sin() * 0.01;
+            Vector::new(p.x * 1.08 + j, p.y - j, p.z * 1.05)
+        };
+        let w = |i: usize| if i.is_multiple_of(23) { 0.0 } else { 50.0 };
+        let run = |simd: bool, threads: usize| {
+            let (_, mut plan, mut lanes) = setup((21, 70), jitter, w);
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                crate::parallel::with_team(threads > 1, |team| {
+                    let mut scratch = ChainScratch::default();
+                    scratch.solve_with(&mut plan, &mut lanes, (1.0e-3, 1), team, simd);
+                })
+            });
+            let (_, [rows, cols]) = plan.stretch_passes();
+            let lambda: Vec<u32> = rows.iter().chain(&*cols).map(|v| v.to_bits()).collect();
+            let x: Vec<[u32; 3]> = positions(&plan, &mut lanes)
+                .iter()
+                .map(|p| p.to_array().map(f32::to_bits))
+                .collect();
+            (x, lambda)
+        };
+        let one = run(false, 1);
+        let (_, plan, mut lanes) = setup((21, 70), jitter, w);
+        assert_ne!(one.0[5], {
+            let p = positions(&plan, &mut lanes)[5];
+            p.to_array().map(f32::to_bits)
+        });
+        assert_eq!(run(simd_available(), 1), one);
+        assert_eq!(run(simd_available(), 2), one);
+        assert_eq!(run(false, 2), one);
+    }
+
+    #[test]
+    fn the_chains_apply_to_whole_grids_only() {
+        let grid = ClothBuilder::new(6, 5).build().unwrap();
+        assert!(apply_to(&grid));
+        let parts = Cloth::from_parts(
+            grid.positions().to_vec(),
+            grid.masses().to_vec(),
+            grid.springs().iter().collect(),
+            grid.triangles().to_vec(),
+            grid.material.clone(),
+        )
+        .unwrap();
+        assert!(!apply_to(&parts), "no grid");
+    }
+}
