@@ -86,6 +86,15 @@ const XPBD_REACH: f32 = 1.25;
 /// 5.95%), 4.90% with 24 at N = 128 (20 gave 5.28%).
 const XPBD_CHAIN_REACH: f32 = 5.7;
 
+/// Particles along a grid's longer side up to which [`XPBD_CHAIN_REACH`]
+/// holds; past it the reach falls in proportion to the side. The drape at
+/// N = 256 peaked at 5.44% with the 48 substeps of the full reach, 5.13%
+/// with 56, 4.98% with 64, 5.05% with 68, 4.82% with 72 and 80, 4.99%
+/// with 76 and 4.75% with 96 (a limit of 24 passes instead of 8 did not
+/// help: 5.59% at 48): the peak of a landing wanders by a few tenths of a
+/// percent from one count to the next, and this keeps a margin (96 there).
+const XPBD_CHAIN_FULL_REACH_SIDE: f32 = 128.0;
+
 /// Automatic substeps a second at least with the chain solves: 16 a frame
 /// at 60 Hz (self-collision's [`super::MAX_SELF_SUBSTEP`] too). Where the
 /// stretch comes from contacts rather than from the cloth's weight, the
@@ -121,7 +130,13 @@ pub fn stable_substep(cloth: &Cloth, settings: &SolverSettings) -> f32 {
         // with the springs (a heavily damped cloth steps as fast as a light one).
         Integrator::Xpbd => {
             let chains = settings.xpbd_chains && grid_chains::apply_to(cloth);
-            let reach = if chains { XPBD_CHAIN_REACH } else { XPBD_REACH };
+            let reach = match cloth.grid() {
+                Some(grid) if chains => {
+                    let side = grid.cols.max(grid.rows) as f32;
+                    XPBD_CHAIN_REACH * (XPBD_CHAIN_FULL_REACH_SIDE / side).min(1.0)
+                }
+                _ => XPBD_REACH,
+            };
             reach * 2.0 / bulk_stiffness(cloth).sqrt()
         }
         Integrator::ExplicitEuler => {
