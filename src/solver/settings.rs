@@ -46,9 +46,10 @@ pub struct SolverSettings {
     /// Before each substep's sweeps, solve the stretch springs of every
     /// row and every column of a grid cloth directly, one tridiagonal
     /// solve a row or column (`grid_chains.rs`): a correction then crosses
-    /// the cloth in one substep, and the automatic substeps are about a
-    /// fifth as many (12 instead of 55 for the drape at N = 64). No effect
-    /// on cloth that is not a whole grid (a mesh, a torn grid).
+    /// the cloth in one substep, and the automatic substeps are fewer (16
+    /// instead of 55 for the drape at N = 64, 24 instead of 109 at
+    /// N = 128; see `ClothSolver::substeps_among` for when they are not).
+    /// No effect on cloth that is not a whole grid (a mesh, a torn grid).
     pub xpbd_chains: bool,
     /// Also keep stretch and shear springs (not only particles) out of obstacles,
     /// so cloth cannot cut through edges and corners.
