@@ -102,6 +102,9 @@ struct Showcase {
     help: bool,
     message: String,
     step_ms: f64,
+    /// Substeps the last step took (automatic ones depend on the obstacles
+    /// near the cloth); 0 before the first.
+    substeps: u32,
     frame_ms: f64,
 }
 
@@ -174,6 +177,7 @@ async fn interactive(source: String, options: SceneOptions) {
         help: true,
         message: String::new(),
         step_ms: 0.0,
+        substeps: 0,
         frame_ms: 0.0,
     };
     let font = Font::default();
@@ -356,7 +360,7 @@ async fn interactive(source: String, options: SceneOptions) {
         if !app.paused || step_once {
             let start = std::time::Instant::now();
             match app.scene.step_frame() {
-                Ok(_) => app.message.retain(|_| true),
+                Ok(report) => app.substeps = report.substeps,
                 Err(e) => {
                     app.message = e.to_string();
                     app.paused = true;
@@ -400,7 +404,11 @@ fn overlay_text(window: &mut Window, font: &std::sync::Arc<Font>, app: &Showcase
             "frame {:.1} ms  step {:.2} ms  substeps {}  |  energy {:.3} J (kinetic {:.3})  |  stretch {:.2}%{}",
             app.frame_ms,
             app.step_ms,
-            app.scene.solver.substeps_for(cloth, app.scene.dt),
+            if app.substeps > 0 {
+                app.substeps
+            } else {
+                app.scene.solver.substeps_for(cloth, app.scene.dt)
+            },
             e.total(),
             e.kinetic,
             100.0 * cloth.max_strain(SpringKind::Stretch),
