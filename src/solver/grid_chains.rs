@@ -212,6 +212,13 @@ impl ChainScratch {
 /// scratch stay in the first-level cache.
 const TILE: usize = 8;
 
+/// Checks, once a transpose, what its unchecked copies rely on: every
+/// array holds the whole grid, and each lane of a row has its column.
+fn assert_within(pairs: &[(&[f32], Disjoint<f32>)], column: &[u32], (cols, rows): (usize, usize)) {
+    let n = cols * rows;
+    assert!(pairs.iter().all(|(a, b)| a.len() >= n && b.len() >= n) && column.len() == cols);
+}
+
 /// Copies each pair's lanes (row-major, `shape` = (columns, rows), lanes
 /// of a row in the plan's order) into its scratch (column-major), a chunk
 /// of lanes along the rows a thread, in tiles of [`TILE`] rows.
@@ -225,8 +232,7 @@ unsafe fn transpose_in(
     (cols, rows): (usize, usize),
     team: Team,
 ) {
-    let n = cols * rows;
-    assert!(pairs.iter().all(|(a, b)| a.len() >= n && b.len() >= n) && column.len() == cols);
+    assert_within(pairs, column, (cols, rows));
     team.sum_count(cols.div_ceil(CHUNK), |q| {
         let lanes = q * CHUNK..((q + 1) * CHUNK).min(cols);
         for r0 in (0..rows).step_by(TILE) {
@@ -258,8 +264,7 @@ unsafe fn transpose_out(
     (cols, rows): (usize, usize),
     team: Team,
 ) {
-    let n = cols * rows;
-    assert!(pairs.iter().all(|(a, b)| a.len() >= n && b.len() >= n) && column.len() == cols);
+    assert_within(pairs, column, (cols, rows));
     team.sum_count(rows.div_ceil(CHUNK), |q| {
         let rs = q * CHUNK..((q + 1) * CHUNK).min(rows);
         for &(from, to) in pairs {
