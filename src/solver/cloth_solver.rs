@@ -131,15 +131,20 @@ pub(super) fn substeps_with(settings: &SolverSettings, cloth: &Cloth, dt: f32) -
             if cloth.params.self_collision {
                 // Layers cross at the chains' longer substeps (the fold's
                 // 71 self-intersections at 16 substeps, none at 55).
-                let unshortened = SolverSettings {
-                    xpbd_chains: false,
-                    ..settings.clone()
-                };
-                let stable = stable_substeps(cloth, &unshortened, dt);
+                let stable = stable_substeps(cloth, &unshortened(settings), dt);
                 stable.max(self_collision_substeps(dt))
             } else {
                 stable_substeps(cloth, settings, dt)
             }
         }
+    }
+}
+
+/// `settings` with the automatic substeps the sweeps alone would take: not
+/// lengthened by the chain solves (which still run).
+pub(super) fn unshortened(settings: &SolverSettings) -> SolverSettings {
+    SolverSettings {
+        xpbd_chains: false,
+        ..settings.clone()
     }
 }

@@ -22,11 +22,10 @@
 //! The stages' loops over particles, bands and springs run on the team
 //! (`parallel.rs`), with the bits of one thread.
 
-use super::cloth_solver::{substeps_with, ClothSolver};
+use super::cloth_solver::{substeps_with, unshortened, ClothSolver};
 use super::integrate::integrate;
 use super::integrator::Integrator;
 use super::report::{StepReport, MAX_DISTANCE, MAX_SPEED, MAX_STRAIN};
-use super::settings::SolverSettings;
 use super::stability::stable_substeps;
 use super::stage_times::Lap;
 use super::strain_limit::limit_stretch;
@@ -170,11 +169,7 @@ impl ClothSolver {
             && self.settings.xpbd_chains
             && self.settings.substeps == Substeps::Auto;
         if shortened && edges_within_reach(cloth, obstacles, dt) {
-            let unshortened = SolverSettings {
-                xpbd_chains: false,
-                ..self.settings.clone()
-            };
-            return substeps_with(&unshortened, cloth, dt);
+            return substeps_with(&unshortened(&self.settings), cloth, dt);
         }
         self.substeps_for(cloth, dt)
     }
