@@ -98,13 +98,23 @@ impl Team<'static> {
     };
 }
 
-impl Team<'_> {
+impl<'a> Team<'a> {
     /// True when the loops run in order on the calling thread.
     pub(crate) fn is_alone(self) -> bool {
         #[cfg(feature = "parallel")]
         return self.shared.is_none();
         #[cfg(not(feature = "parallel"))]
         true
+    }
+
+    /// This team for a loop of `work` items, or [`Team::ALONE`] below
+    /// `least` of them: handing out a short loop costs more than it saves.
+    pub(crate) fn for_work(self, work: usize, least: usize) -> Team<'a> {
+        if work >= least {
+            self
+        } else {
+            Team::ALONE
+        }
     }
 
     /// Runs `f` on every item and sums what it returns.

@@ -134,7 +134,7 @@ impl ChainScratch {
             let mut w = self.work.all_mut().map(Disjoint::new);
             std::array::from_fn(|_| w.next().expect("five"))
         };
-        let team_t = team_for(team, n);
+        let team_t = team.for_work(n, PARALLEL_MIN_SPRINGS);
         let shape = (cols, rows);
         // Rows: into the transposed scratch. Inverse masses and rest
         // lengths only when the masses or the plan changed.
@@ -282,15 +282,6 @@ unsafe fn transpose_out(
     });
 }
 
-/// The team for `springs` springs: alone when they are few.
-fn team_for(team: Team, springs: usize) -> Team {
-    if springs >= PARALLEL_MIN_SPRINGS {
-        team
-    } else {
-        Team::ALONE
-    }
-}
-
 /// Solves the `width` chains of `chains`, a chunk at a time.
 fn solve_all(chains: Chains, width: usize, team: Team, simd: bool) {
     let total = chains.len * chains.stride;
@@ -301,7 +292,8 @@ fn solve_all(chains: Chains, width: usize, team: Team, simd: bool) {
     );
     assert!(chains.w.len() >= total && chains.rest.len() >= total);
     let chunks = width.div_ceil(CHUNK);
-    team_for(team, width * chains.len).sum_count(chunks, |q| {
+    let team = team.for_work(width * chains.len, PARALLEL_MIN_SPRINGS);
+    team.sum_count(chunks, |q| {
         let j = q * CHUNK..((q + 1) * CHUNK).min(width);
         #[cfg(target_arch = "x86_64")]
         if simd {

@@ -148,15 +148,6 @@ pub(crate) struct GridPlan {
 /// it out costs more than it saves.
 const PARALLEL_MIN_SPRINGS: usize = 2048;
 
-/// The team for a phase of `springs` springs: alone when they are few.
-fn team_for(team: Team, springs: usize) -> Team {
-    if springs >= PARALLEL_MIN_SPRINGS {
-        team
-    } else {
-        Team::ALONE
-    }
-}
-
 /// Rows a band has at least: more bands would leave too little work to a
 /// thread, and a boundary's rows (two either side) must not reach the next.
 const BAND_ROWS: usize = 16;
@@ -611,34 +602,36 @@ fn sweep_with(
     let k: [Compliance; 6] = std::array::from_fn(|p| compliance[plan.passes[p].kind.index()]);
     let rest: [&[f32]; 6] = std::array::from_fn(|p| plan.rest.get(p));
     for (phase, work) in plan.phases.iter().zip(&plan.work) {
-        team_for(team, work.iter().sum()).sum_over(phase, |region| {
-            // SAFETY: the regions of a phase touch disjoint lanes (the plan
-            // is built so, and tested), so the views alive at once are
-            // disjoint; `lanes` and the passes are borrowed for the sweep.
-            let (mut view, lambda): (_, [&mut [f32]; 6]) = unsafe {
-                (
-                    shared.view(region.lanes.clone()),
-                    std::array::from_fn(|p| shared.lambda(p, region.lanes.clone())),
-                )
-            };
-            for (p, lambda) in lambda.into_iter().enumerate() {
-                let job = RegionSweep {
-                    region,
-                    p,
-                    rest: &rest,
-                    k: &k,
+        let springs = work.iter().sum();
+        team.for_work(springs, PARALLEL_MIN_SPRINGS)
+            .sum_over(phase, |region| {
+                // SAFETY: the regions of a phase touch disjoint lanes (the plan
+                // is built so, and tested), so the views alive at once are
+                // disjoint; `lanes` and the passes are borrowed for the sweep.
+                let (mut view, lambda): (_, [&mut [f32]; 6]) = unsafe {
+                    (
+                        shared.view(region.lanes.clone()),
+                        std::array::from_fn(|p| shared.lambda(p, region.lanes.clone())),
+                    )
                 };
-                #[cfg(target_arch = "x86_64")]
-                if simd {
-                    // SAFETY: `simd` only when the CPU has AVX2.
-                    unsafe { sweep_region_avx2(&job, &mut view, lambda) };
-                    continue;
+                for (p, lambda) in lambda.into_iter().enumerate() {
+                    let job = RegionSweep {
+                        region,
+                        p,
+                        rest: &rest,
+                        k: &k,
+                    };
+                    #[cfg(target_arch = "x86_64")]
+                    if simd {
+                        // SAFETY: `simd` only when the CPU has AVX2.
+                        unsafe { sweep_region_avx2(&job, &mut view, lambda) };
+                        continue;
+                    }
+                    let _ = simd;
+                    sweep_region(&job, &mut view, lambda);
                 }
-                let _ = simd;
-                sweep_region(&job, &mut view, lambda);
-            }
-            0
-        });
+                0
+            });
     }
 }
 
@@ -761,30 +754,33 @@ fn limit_stretch_with(
                 &limits[..]
             };
             let springs = limits.iter().map(|&(p, _)| work[p]).sum();
-            over += team_for(team, springs).sum_over(phase, |region| {
-                // SAFETY: as in `sweep_with`: disjoint regions, borrowed buffers.
-                let (mut view, moved) = unsafe {
-                    (
-                        shared.view(region.lanes.clone()),
-                        moved.range(region.lanes.clone()),
-                    )
-                };
-                let (mut over, mut least) = (0, f32::INFINITY);
-                let mut marks = LimitMarks {
-                    moved,
-                    pass: number,
-                };
-                for &(p, rest) in limits {
-                    let rest = &rest[region.lanes.clone()];
-                    let runs = &region.runs[p];
-                    let (o, l) = limit_region(runs, rest, &mut view, factor, (&mut marks, simd));
-                    // The room is the stretch springs' alone.
-                    let l = if p < 4 { l } else { f32::INFINITY };
-                    (over, least) = (over + o, least.min(l));
-                }
-                room.fetch_min(least.to_bits(), Ordering::Relaxed);
-                over
-            });
+            over += team
+                .for_work(springs, PARALLEL_MIN_SPRINGS)
+                .sum_over(phase, |region| {
+                    // SAFETY: as in `sweep_with`: disjoint regions, borrowed buffers.
+                    let (mut view, moved) = unsafe {
+                        (
+                            shared.view(region.lanes.clone()),
+                            moved.range(region.lanes.clone()),
+                        )
+                    };
+                    let (mut over, mut least) = (0, f32::INFINITY);
+                    let mut marks = LimitMarks {
+                        moved,
+                        pass: number,
+                    };
+                    for &(p, rest) in limits {
+                        let rest = &rest[region.lanes.clone()];
+                        let runs = &region.runs[p];
+                        let (o, l) =
+                            limit_region(runs, rest, &mut view, factor, (&mut marks, simd));
+                        // The room is the stretch springs' alone.
+                        let l = if p < 4 { l } else { f32::INFINITY };
+                        (over, least) = (over + o, least.min(l));
+                    }
+                    room.fetch_min(least.to_bits(), Ordering::Relaxed);
+                    over
+                });
         }
         (over, f32::from_bits(room.into_inner()))
     };

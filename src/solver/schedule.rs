@@ -24,9 +24,8 @@
 
 use super::cloth_solver::{substeps_with, unshortened, ClothSolver};
 use super::integrate::integrate;
-use super::integrator::Integrator;
 use super::report::{StepReport, MAX_DISTANCE, MAX_SPEED, MAX_STRAIN};
-use super::stability::stable_substeps;
+use super::stability::{chains_lengthen, stable_substeps};
 use super::stage_times::Lap;
 use super::strain_limit::limit_stretch;
 use super::substep::Substep;
@@ -165,10 +164,9 @@ impl ClothSolver {
     /// chains' 9 substeps, and needs 22–24 to stay under 5% (41 without
     /// the chains: 4.53%); the drape over a ball stays under 5% at 12.
     pub fn substeps_among(&self, cloth: &Cloth, obstacles: &[Obstacle], dt: f32) -> u32 {
-        let shortened = self.settings.integrator == Integrator::Xpbd
-            && self.settings.xpbd_chains
-            && self.settings.substeps == Substeps::Auto;
-        if shortened && edges_within_reach(cloth, obstacles, dt) {
+        let lengthened =
+            self.settings.substeps == Substeps::Auto && chains_lengthen(cloth, &self.settings);
+        if lengthened && edges_within_reach(cloth, obstacles, dt) {
             return substeps_with(&unshortened(&self.settings), cloth, dt);
         }
         self.substeps_for(cloth, dt)

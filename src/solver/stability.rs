@@ -106,6 +106,12 @@ const XPBD_CHAIN_FULL_REACH_SIDE: f32 = 128.0;
 /// 34); the `pins` sheet 5.6% at 7, 4.9% at 12.
 const XPBD_CHAIN_SUBSTEPS_PER_SECOND: f32 = 960.0;
 
+/// Whether the chain solves lengthen the automatic substeps of `settings`
+/// on `cloth`: the small-steps solver with them on, on a whole grid.
+pub(crate) fn chains_lengthen(cloth: &Cloth, settings: &SolverSettings) -> bool {
+    settings.integrator == Integrator::Xpbd && settings.xpbd_chains && grid_chains::apply_to(cloth)
+}
+
 /// The largest substep (seconds) at which the integrator of `settings` is
 /// estimated to be stable on this cloth (for the small-steps solver, which
 /// is stable at any step: the substep at which its springs keep their
@@ -129,9 +135,8 @@ pub fn stable_substep(cloth: &Cloth, settings: &SolverSettings) -> f32 {
         // Damping takes no substeps here: the sweep treats it implicitly,
         // with the springs (a heavily damped cloth steps as fast as a light one).
         Integrator::Xpbd => {
-            let chains = settings.xpbd_chains && grid_chains::apply_to(cloth);
             let reach = match cloth.grid() {
-                Some(grid) if chains => {
+                Some(grid) if chains_lengthen(cloth, settings) => {
                     let side = grid.cols.max(grid.rows) as f32;
                     XPBD_CHAIN_REACH * (XPBD_CHAIN_FULL_REACH_SIDE / side).min(1.0)
                 }
@@ -165,8 +170,7 @@ pub fn stable_substep(cloth: &Cloth, settings: &SolverSettings) -> f32 {
 pub fn stable_substeps(cloth: &Cloth, settings: &SolverSettings, dt: f32) -> u32 {
     let h = stable_substep(cloth, settings);
     let mut k = (dt / h).ceil();
-    let chains = settings.xpbd_chains && grid_chains::apply_to(cloth);
-    if settings.integrator == Integrator::Xpbd && chains {
+    if chains_lengthen(cloth, settings) {
         // A thousandth below: 1/60 s at 960 a second is 16, not 17.
         k = k.max((dt * XPBD_CHAIN_SUBSTEPS_PER_SECOND - 1.0e-3).ceil());
     }
