@@ -263,3 +263,93 @@ fn a_step_reports_where_its_time_went() {
     }
     assert!(seen.integrate > 0.0 && seen.contacts > 0.0, "{seen:?}");
 }
+
+/// A 40×40 cotton sheet, 0.6 m a side, lying flat 2 mm above the
+/// thickness over the top of a cuboid whose top is at y = 0 (fine enough
+/// that the sweeps alone would take more than 32 substeps a frame).
+fn sheet_over_a_cuboid() -> Simulation {
+    Simulation::new(
+        ClothBuilder::new(40, 40)
+            .size(0.6, 0.6)
+            .horizontal(Vector::new(0.0, 0.012, 0.0))
+            .material(Material::cotton())
+            .build()
+            .unwrap(),
+    )
+}
+
+#[test]
+fn near_a_still_cuboid_xpbd_takes_32_substeps_and_near_a_moving_one_the_sweeps_own() {
+    let sim = sheet_over_a_cuboid();
+    let dt = 1.0 / 60.0;
+    let top = Pose::from_translation(Vector::new(0.0, -0.5, 0.0));
+    let still = Obstacle::cuboid(Vector::new(0.2, 0.5, 0.2), top);
+    let moving = still
+        .clone()
+        .with_velocity(Vector::new(0.1, 0.0, 0.0), Vector::ZERO);
+    let ball = Obstacle::ball(Vector::new(0.0, -0.2, 0.0), 0.2);
+    let far = Obstacle::cuboid(
+        Vector::splat(0.1),
+        Pose::from_translation(Vector::new(5.0, 0.0, 0.0)),
+    );
+    let solver = &sim.solver;
+    let among = |obstacles: &[Obstacle]| solver.substeps_among(&sim.cloth, obstacles, dt);
+    // The chains' own count: at least 16 a frame, here the floor.
+    let chains = sim.substeps_for(dt);
+    assert_eq!(chains, 16);
+    let sweeps = {
+        let mut alone = sim.clone();
+        alone.solver.settings.xpbd_chains = false;
+        alone.substeps_for(dt)
+    };
+    assert!(sweeps > 32, "the sweeps alone take {sweeps}");
+    assert_eq!(among(&[]), chains);
+    assert_eq!(
+        among(std::slice::from_ref(&ball)),
+        chains,
+        "a ball has no edges"
+    );
+    assert_eq!(among(std::slice::from_ref(&far)), chains, "out of reach");
+    assert_eq!(among(std::slice::from_ref(&still)), 32);
+    assert_eq!(among(&[still.clone(), moving.clone()]), sweeps);
+    assert_eq!(among(std::slice::from_ref(&moving)), sweeps);
+}
+
+#[test]
+fn cloth_on_a_still_slope_sticks_by_friction_and_slides_without_it() {
+    // A slope of 0.3 rad (tan 0.31): held by a friction of 0.6, not by 0.1.
+    // The planes take the contacts' normal speed inside the substep, so
+    // the friction must come from them too: without it the cloth slid at
+    // 0.6 as fast as at 0.1.
+    let slope = 0.3f32;
+    let down = Vector::new(slope.cos(), -slope.sin(), 0.0);
+    let pose = Pose::from_parts(
+        Vector::new(0.0, -0.5, 0.0),
+        Rotation::from_rotation_z(-slope),
+    );
+    let slid = |friction: f32| {
+        let ramp = Obstacle::cuboid(Vector::new(2.0, 0.5, 2.0), pose).with_friction(friction);
+        let mut sim = sheet_over_a_cuboid();
+        // Laid on the ramp: rotated with it.
+        let start: Vec<Vector> = sim
+            .positions()
+            .iter()
+            .map(|&p| Rotation::from_rotation_z(-slope) * p)
+            .collect();
+        for (i, &p) in start.iter().enumerate() {
+            sim.set_position(i, p).unwrap();
+        }
+        let before = sim.centroid();
+        for _ in 0..60 {
+            let report = sim.step(1.0 / 60.0, std::slice::from_ref(&ramp)).unwrap();
+            assert_eq!(report.substeps, 32);
+        }
+        assert!(sim.max_strain(SpringKind::Stretch) < 0.05);
+        (sim.centroid() - before).dot(down)
+    };
+    let held = slid(0.6);
+    let free = slid(0.1);
+    assert!(held.abs() < 0.005, "held by friction 0.6, slid {held} m");
+    // Down the slope at g (sin θ − μ cos θ) ≈ 1.9 m/s² for a second.
+    assert!(free > 0.5, "friction 0.1 slid only {free} m");
+}

@@ -12,6 +12,7 @@
 //! ([`SelfContacts`]); [`self_intersections`] counts where they are not.
 
 mod contact;
+mod contact_planes;
 mod contact_set;
 mod edges;
 mod neighbours;
@@ -30,6 +31,7 @@ mod stretch_incidence;
 mod tracks;
 
 pub use contact::{contact, penetration_depth, Contact};
+pub use contact_planes::ContactPlanes;
 pub use contact_set::{ContactSet, ParticleContact};
 pub use obstacle::{DynamicBody, Obstacle, ObstacleImpulse};
 pub use response::{respond, FrictionPolicy, Response};

@@ -144,6 +144,11 @@ impl Obstacle {
         )
     }
 
+    /// Whether the obstacle stays where it is: no rapier body, no velocity.
+    pub fn is_still(&self) -> bool {
+        self.body.is_none() && self.linvel == Vector::ZERO && self.angvel == Vector::ZERO
+    }
+
     /// World bounding box of the obstacle over `[0, dt]` of the step.
     pub fn swept_aabb(&self, dt: f32) -> Aabb {
         let swept = self.shape.compute_swept_aabb(&self.pose, &self.pose_at(dt));

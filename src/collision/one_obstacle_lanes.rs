@@ -208,6 +208,7 @@ impl ParticlePass<'_> {
         let free = self.inv_mass[i] != 0.0;
         out.nearest[k] = 0;
         out.normal[k] = get(&batch.normal);
+        out.surface[k] = out.normal[k].dot(out.x[k]) - signed;
         out.distance[k] = if free { signed.max(thickness) } else { signed };
         if !free && signed < thickness {
             scratch.pinned_close = true;
@@ -446,8 +447,8 @@ mod tests {
             friction,
             far: 0.12,
         };
-        let (mut nearest, mut normal, mut distance) =
-            (vec![7; N], vec![Vector::ONE; N], vec![9.0; N]);
+        let (mut nearest, mut normal, mut distance, mut surface) =
+            (vec![7; N], vec![Vector::ONE; N], vec![9.0; N], vec![9.0; N]);
         let mut set = ContactSet::default();
         set.begin_step(N, 1);
         let mut scratch = BlockScratch::default();
@@ -460,6 +461,7 @@ mod tests {
                 nearest: &mut nearest,
                 normal: &mut normal,
                 distance: &mut distance,
+                surface: &mut surface,
                 // SAFETY: the one range in use.
                 contacts: unsafe { shared.range(0..N) },
             };

@@ -50,13 +50,16 @@ pub(super) struct BlockScratch {
 /// What a block of the pass writes, indexed from the block's first particle:
 /// positions (m) and velocities (m/s); the nearest obstacle (`NONE` for
 /// none), its outward normal, and the distance to it after resolution (m);
-/// the contacts.
+/// the offset (m) of the plane tangent to that obstacle at its point
+/// nearest to the particle (`n · p` for a point `p` of the plane); the
+/// contacts.
 pub(super) struct BlockOut<'a> {
     pub x: &'a mut [Vector],
     pub v: &'a mut [Vector],
     pub nearest: &'a mut [u32],
     pub normal: &'a mut [Vector],
     pub distance: &'a mut [f32],
+    pub surface: &'a mut [f32],
     pub contacts: ContactRange<'a>,
 }
 
@@ -132,6 +135,7 @@ impl ParticlePass<'_> {
                 nearest_distance = hit.signed_distance;
                 out.nearest[k] = o as u32;
                 out.normal[k] = hit.normal;
+                out.surface[k] = hit.normal.dot(hit.point);
                 // Resolution below leaves a particle at least the thickness out.
                 out.distance[k] = if self.inv_mass[i] != 0.0 {
                     hit.signed_distance.max(thickness)

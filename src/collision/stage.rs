@@ -93,6 +93,9 @@ pub struct CollisionStage {
     pub(super) normal: Vec<Vector>,
     /// Per particle: distance to that obstacle after resolution (m).
     pub(super) distance: Vec<f32>,
+    /// Per particle: the offset (m) of that obstacle's tangent plane at its
+    /// point nearest to the particle, along `normal` (`contact_planes.rs`).
+    pub(super) surface: Vec<f32>,
     /// Per particle: listed in `moved`.
     pub(super) edge_moved: Vec<bool>,
     /// The particles the edge pass moved, or the stretch limit in a round
@@ -143,6 +146,7 @@ impl CollisionStage {
         self.nearest.resize(particles, NONE);
         self.normal.resize(particles, Vector::ZERO);
         self.distance.resize(particles, f32::INFINITY);
+        self.surface.resize(particles, 0.0);
         self.edge_moved.resize(particles, false);
         self.moved.clear();
         self.moved.reserve(particles);
@@ -343,6 +347,7 @@ impl CollisionStage {
         let nearest = Disjoint::new(&mut self.nearest[..]);
         let normal = Disjoint::new(&mut self.normal[..]);
         let distance = Disjoint::new(&mut self.distance[..]);
+        let surface = Disjoint::new(&mut self.surface[..]);
         let contact_set = self.contacts.shared();
         let scratch = Disjoint::new(&mut self.blocks[..]);
         let contacts = options.team.sum_count(blocks, |b| {
@@ -357,6 +362,7 @@ impl CollisionStage {
                         nearest: nearest.range(range.clone()),
                         normal: normal.range(range.clone()),
                         distance: distance.range(range.clone()),
+                        surface: surface.range(range.clone()),
                         contacts: contact_set.range(range.clone()),
                     },
                     &mut scratch.range(b..b + 1)[0],

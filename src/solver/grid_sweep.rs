@@ -373,7 +373,6 @@ impl GridPlan {
     }
 
     /// The lane of particle `i`.
-    #[cfg(test)]
     pub fn lane(&self, i: usize) -> usize {
         self.lane[i] as usize
     }

@@ -64,7 +64,7 @@ pub(crate) fn integrate(
             explicit(0)
         }
         Integrator::Xpbd => SubstepOutcome {
-            stretch_room: xpbd::step(sub, x, v, &mut ws.xpbd),
+            stretch_room: xpbd::step(sub, x, v, &mut ws.xpbd, &ws.collision),
             ..explicit(0)
         },
         Integrator::ImplicitEuler => solved(implicit_euler::step(

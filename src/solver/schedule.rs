@@ -25,7 +25,7 @@
 use super::cloth_solver::{substeps_with, unshortened, ClothSolver};
 use super::integrate::integrate;
 use super::report::{StepReport, MAX_DISTANCE, MAX_SPEED, MAX_STRAIN};
-use super::stability::{chains_lengthen, stable_substeps};
+use super::stability::{chains_lengthen, edge_substeps, stable_substeps};
 use super::stage_times::Lap;
 use super::strain_limit::limit_stretch;
 use super::substep::Substep;
@@ -155,21 +155,33 @@ impl ClothSolver {
     }
 
     /// The number of substeps a frame step of `dt` seconds takes on `cloth`
-    /// among `obstacles`: as [`Self::substeps_for`], except that automatic
-    /// substeps of the small-steps solver are not shortened by its chain
-    /// solves while an obstacle with edges or corners
+    /// among `obstacles`: as [`Self::substeps_for`], except for the
+    /// automatic substeps of the small-steps solver where its chain solves
+    /// lengthen them while an obstacle with edges or corners
     /// ([`Obstacle::has_edges`]) is within reach of the cloth this step.
-    /// Measured (BENCHMARKS.md, sixteenth session): a 48 × 48 cotton
-    /// tablecloth dropped on a table peaked at 12.3% stretch with the
-    /// chains' 9 substeps, and needs 22–24 to stay under 5% (41 without
-    /// the chains: 4.53%); the drape over a ball stays under 5% at 12.
+    /// Then they are at least 32 a frame at 60 Hz if every such obstacle is
+    /// still (its contacts are held inside the substep as planes), and the
+    /// sweeps' own count if one moves. Measured (BENCHMARKS.md, sixteenth
+    /// and seventeenth sessions): a 48 × 48 cotton tablecloth dropped on a
+    /// table peaked at 12.3% stretch with the chains' 9 substeps and no
+    /// planes, 4.56% at 32 with them (4.53% at the sweeps' 41); the drape
+    /// over a ball stays under 5% at 12.
     pub fn substeps_among(&self, cloth: &Cloth, obstacles: &[Obstacle], dt: f32) -> u32 {
         let lengthened =
             self.settings.substeps == Substeps::Auto && chains_lengthen(cloth, &self.settings);
-        if lengthened && edges_within_reach(cloth, obstacles, dt) {
-            return substeps_with(&unshortened(&self.settings), cloth, dt);
+        if !lengthened {
+            return self.substeps_for(cloth, dt);
         }
-        self.substeps_for(cloth, dt)
+        match edges_within_reach(cloth, obstacles, dt) {
+            EdgesNear::None => self.substeps_for(cloth, dt),
+            EdgesNear::Still => {
+                let sweeps = substeps_with(&unshortened(&self.settings), cloth, dt);
+                self.substeps_for(cloth, dt)
+                    .max(edge_substeps(dt))
+                    .min(sweeps)
+            }
+            EdgesNear::Moving => substeps_with(&unshortened(&self.settings), cloth, dt),
+        }
     }
 
     /// The substeps of a step of `dt` seconds in `k` substeps, on the
@@ -367,22 +379,40 @@ fn max_rest_length(cloth: &Cloth) -> f32 {
         .fold(0.0, f32::max)
 }
 
-/// Whether an obstacle with edges or corners may meet the cloth within a
-/// step of `dt` seconds: its swept bounding box meets the cloth's, grown by
-/// how far a particle may move in the step.
-fn edges_within_reach(cloth: &Cloth, obstacles: &[Obstacle], dt: f32) -> bool {
+/// Which obstacles with edges or corners may meet the cloth within a step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum EdgesNear {
+    /// None.
+    None,
+    /// Some, every one of them still ([`Obstacle::is_still`]).
+    Still,
+    /// Some, and one of them moves.
+    Moving,
+}
+
+/// Which obstacles with edges or corners may meet the cloth within a step
+/// of `dt` seconds: those whose swept bounding box meets the cloth's, grown
+/// by how far a particle may move in the step.
+fn edges_within_reach(cloth: &Cloth, obstacles: &[Obstacle], dt: f32) -> EdgesNear {
     if !obstacles.iter().any(Obstacle::has_edges) {
-        return false;
+        return EdgesNear::None;
     }
     let x = cloth.positions();
     let Some(&first) = x.first() else {
-        return false;
+        return EdgesNear::None;
     };
     let (lo, hi) = x
         .iter()
         .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
     let cloth_box = Aabb::new(lo, hi).loosened(candidate_margin(cloth, dt));
-    obstacles
-        .iter()
-        .any(|o| o.has_edges() && o.swept_aabb(dt).intersects(&cloth_box))
+    let mut near = EdgesNear::None;
+    for o in obstacles {
+        if o.has_edges() && o.swept_aabb(dt).intersects(&cloth_box) {
+            if !o.is_still() {
+                return EdgesNear::Moving;
+            }
+            near = EdgesNear::Still;
+        }
+    }
+    near
 }

@@ -1,0 +1,110 @@
+//! Contact planes: each particle that rests on or comes near a still
+//! obstacle gets, for one substep, the obstacle's tangent plane at the
+//! point nearest to it, moved out by the thickness. A solver that projects
+//! its particles onto these half-spaces between its sweeps meets the
+//! contacts inside the substep (Macklin et al. 2019, "Small steps"), where
+//! springs and contacts converge together, instead of having the collision
+//! stage push the particles out after it. The plane is taken where the
+//! particle starts the substep, outside the obstacle: a particle the
+//! springs pull over a box's edge is held by the face it was on, never
+//! pushed out through the other.
+
+use super::obstacle::Obstacle;
+use super::stage::CollisionStage;
+use crate::math::Vector;
+
+/// One substep's contact planes, as a flat list.
+#[derive(Debug, Default)]
+pub struct ContactPlanes {
+    /// The particle of each plane.
+    pub particle: Vec<u32>,
+    /// Its unit outward normal.
+    pub normal: Vec<Vector>,
+    /// Its offset (m): the particle must keep `normal · x ≥ offset`.
+    pub offset: Vec<f32>,
+    /// How far (m) the projections pushed it along the normal, summed
+    /// over the substep (the normal "impulse" friction is bounded by).
+    pub depth: Vec<f32>,
+    /// The obstacle's friction coefficient.
+    pub friction: Vec<f32>,
+    /// Per obstacle: whether its contacts are held as planes.
+    held: Vec<bool>,
+}
+
+impl ContactPlanes {
+    /// Removes every plane.
+    pub fn clear(&mut self) {
+        self.particle.clear();
+        self.normal.clear();
+        self.offset.clear();
+        self.depth.clear();
+        self.friction.clear();
+    }
+
+    /// The number of planes.
+    pub fn len(&self) -> usize {
+        self.particle.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.particle.is_empty()
+    }
+}
+
+/// How far (m) a particle may lie inside the plane the particle pass found
+/// before the plane is looked up afresh where the particle is.
+const PLANE_SLACK: f32 = 1.0e-5;
+
+impl CollisionStage {
+    /// The contact planes of a substep of `h` seconds for particles at `x`
+    /// moving at `v` (their start), into `planes`: one for each free
+    /// particle whose nearest obstacle at the last resolution is still and
+    /// has edges ([`Obstacle::is_still`], [`Obstacle::has_edges`]), and
+    /// may be reached within the substep (its gap over the thickness under
+    /// twice the particle's motion at `v` plus the thickness). The plane is
+    /// the one the particle pass found, unless the particle has moved inside
+    /// it since: then it is looked up afresh where the particle is.
+    pub(crate) fn contact_planes(
+        &self,
+        (x, v, inv_mass): (&[Vector], &[Vector], &[f32]),
+        obstacles: &[Obstacle],
+        (h, thickness): (f32, f32),
+        planes: &mut ContactPlanes,
+    ) {
+        planes.clear();
+        planes.held.clear();
+        planes
+            .held
+            .extend(obstacles.iter().map(|o| o.has_edges() && o.is_still()));
+        if !planes.held.iter().any(|&held| held) || self.nearest.len() != v.len() {
+            return;
+        }
+        for i in 0..v.len() {
+            let o = self.nearest[i] as usize;
+            // `NONE` and obstacles of another step are out of range.
+            if !planes.held.get(o).copied().unwrap_or(false) || inv_mass[i] == 0.0 {
+                continue;
+            }
+            let reach = thickness + 2.0 * v[i].length() * h;
+            if self.distance[i] - thickness > reach {
+                continue;
+            }
+            let (mut normal, mut offset) = (self.normal[i], self.surface[i] + thickness);
+            // Moved inside the plane since the particle pass (by the edge
+            // pass or the stretch hold, perhaps round an edge onto another
+            // face): the obstacle's plane where the particle is now.
+            if normal.dot(x[i]) < offset - PLANE_SLACK {
+                let Some(hit) = self.tracks.contact(obstacles, o, x[i]) else {
+                    continue;
+                };
+                (normal, offset) = (hit.normal, hit.normal.dot(hit.point) + thickness);
+            }
+            planes.particle.push(i as u32);
+            planes.normal.push(normal);
+            planes.offset.push(offset);
+            planes.depth.push(0.0);
+            planes.friction.push(obstacles[o].friction);
+        }
+    }
+}
