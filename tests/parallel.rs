@@ -45,11 +45,13 @@ fn parallel_and_serial_steps_are_bit_identical() {
 fn the_default_solver_gives_the_same_bits_on_two_threads_as_on_one() {
     // xpbd's sweep in bands, its particle loops and the collision stage's
     // blocks on a team; the drape lying on its ball (contacts, friction,
-    // the edge pass) and the hammock with its dynamic boxes (momentum
+    // the edge pass), the box on its cube (contact planes held inside the
+    // substep, in chunks on the team) and the hammock with its dynamic boxes (momentum
     // handed to rapier, summed in particle order); the fold's
     // self-collision, whose look for pairs runs on the team.
     for (kind, n, frames) in [
         (SceneKind::Drape, 64, 40),
+        (SceneKind::Box, 64, 40),
         (SceneKind::Hammock, 64, 60),
         (SceneKind::Fold, 48, 60),
         (SceneKind::Stack, 28, 50),

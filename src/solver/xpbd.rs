@@ -23,7 +23,8 @@ use crate::cloth::{Grid, Springs};
 use crate::collision::{CollisionStage, ContactPlanes};
 use crate::forces::{add_wind_forces, ForceModel};
 use crate::math::Vector;
-use crate::parallel::Disjoint;
+use crate::parallel::{Disjoint, Team};
+use std::sync::atomic::{AtomicU32, Ordering};
 
 use super::general_sweep::{self, PackedParticles};
 use super::grid_chains::ChainScratch;
@@ -173,11 +174,11 @@ pub(crate) fn step(
             if sub.settings.xpbd_chains {
                 let alpha = compliance[0].alpha;
                 ws.chains.solve(plan, l, (alpha, sub.mass_revision), team);
-                project_planes(planes, lane, l);
+                project_planes(planes, lane, l, team);
             }
             for _ in 0..sub.settings.xpbd_iterations {
                 sweep(plan, l, &compliance, team);
-                project_planes(planes, lane, l);
+                project_planes(planes, lane, l, team);
             }
             let (_, room) = limit_stretch(plan, l, model.stretch_limit, team);
             let room = hold_planes((planes, lane), plan, l, (model.stretch_limit, room), team);
@@ -261,27 +262,94 @@ fn correct_velocity(v: &mut Vector, correction: Vector, inv_mass: f32, h: f32) {
     }
 }
 
-/// Projects every particle with a contact plane onto its half-space, in
-/// the lanes (`lane` of each plane); adds the push to the plane's depth.
-/// Returns the farthest it pushed one (m).
-fn project_planes(planes: &mut ContactPlanes, lane: &[u32], lanes: &mut Lanes) -> f32 {
-    let mut farthest = 0.0f32;
-    let [lx, ly, lz, ..] = lanes.arrays_mut();
-    assert!(lane.len() == planes.len() && planes.depth.len() == planes.len());
-    for (k, &at) in lane.iter().enumerate() {
-        let at = at as usize;
-        let n = planes.normal[k];
-        let p = Vector::new(lx[at], ly[at], lz[at]);
-        let gap = n.dot(p) - planes.offset[k];
-        if gap < 0.0 {
-            let q = p - n * gap;
-            (lx[at], ly[at], lz[at]) = (q.x, q.y, q.z);
-            planes.depth[k] -= gap;
-            farthest = farthest.max(-gap);
-        }
-    }
-    farthest
+/// Planes per chunk of a pass over the contact planes, a chunk to a thread.
+const PLANE_CHUNK: usize = 1024;
+
+/// Runs `f` on every chunk of [`PLANE_CHUNK`] planes of `count` (on the
+/// `team`'s threads from two chunks on) and returns the largest of what it
+/// returns (non-negative): the same whatever the order.
+fn for_plane_chunks(
+    count: usize,
+    team: Team,
+    f: impl Fn(std::ops::Range<usize>) -> f32 + Sync,
+) -> f32 {
+    let largest = AtomicU32::new(0);
+    let chunks = count.div_ceil(PLANE_CHUNK);
+    team.for_work(count, 2 * PLANE_CHUNK)
+        .sum_count(chunks, |c| {
+            let got = f(c * PLANE_CHUNK..((c + 1) * PLANE_CHUNK).min(count));
+            // Non-negative floats order as their bits do.
+            largest.fetch_max(got.max(0.0).to_bits(), Ordering::Relaxed);
+            0
+        });
+    f32::from_bits(largest.into_inner())
 }
+
+/// Projects every particle with a contact plane onto its half-space, in
+/// the lanes (`lane` of each plane: each lane is at most one plane's); adds
+/// the push to the plane's depth. Returns the farthest it pushed one (m).
+fn project_planes(planes: &mut ContactPlanes, lane: &[u32], lanes: &mut Lanes, team: Team) -> f32 {
+    let ContactPlanes {
+        normal,
+        offset,
+        depth,
+        ..
+    } = planes;
+    let count = lane.len();
+    assert!(normal.len() == count && offset.len() == count && depth.len() == count);
+    let [lx, ly, lz, ..] = lanes.disjoint();
+    let n_lanes = lx.len();
+    let (px, py, pz) = (lx.as_ptr(), ly.as_ptr(), lz.as_ptr());
+    let (depth, (px, py, pz)) = (
+        Disjoint::new(&mut depth[..]),
+        (SendPtr(px), SendPtr(py), SendPtr(pz)),
+    );
+    for_plane_chunks(count, team, |range| {
+        // SAFETY: chunks are disjoint ranges of planes.
+        let depth = unsafe { depth.range(range.clone()) };
+        let mut farthest = 0.0f32;
+        for (d, k) in depth.iter_mut().zip(range) {
+            let at = lane[k] as usize;
+            assert!(at < n_lanes);
+            let n = normal[k];
+            // SAFETY: in bounds (asserted); lane `at` is this plane's
+            // alone, so no other thread reads or writes it meanwhile.
+            unsafe {
+                let p = Vector::new(*px.at(at), *py.at(at), *pz.at(at));
+                let gap = n.dot(p) - offset[k];
+                if gap < 0.0 {
+                    let q = p - n * gap;
+                    (*px.at(at), *py.at(at), *pz.at(at)) = (q.x, q.y, q.z);
+                    *d -= gap;
+                    farthest = farthest.max(-gap);
+                }
+            }
+        }
+        farthest
+    })
+}
+
+/// A pointer threads may share: [`project_planes`] and [`hold_planes`]
+/// write through it only at lanes of their own planes.
+#[derive(Clone, Copy)]
+struct SendPtr(*mut f32);
+impl SendPtr {
+    /// The pointer `at` elements on (through a method, so that closures
+    /// capture the whole `SendPtr`, not its raw field).
+    ///
+    /// # Safety
+    /// As [`pointer::add`].
+    #[inline(always)]
+    unsafe fn at(self, at: usize) -> *mut f32 {
+        // SAFETY: the caller's.
+        unsafe { self.0.add(at) }
+    }
+}
+
+// SAFETY: see the type's doc: every element is reached from one thread.
+unsafe impl Send for SendPtr {}
+// SAFETY: as above.
+unsafe impl Sync for SendPtr {}
 
 /// Rounds of the contact planes against the stretch limit after the sweeps:
 /// each pushes the particles back onto their planes, and all but the last
@@ -303,14 +371,14 @@ fn hold_planes(
     plan: &mut GridPlan,
     lanes: &mut Lanes,
     (factor, room): (f32, Option<f32>),
-    team: crate::parallel::Team,
+    team: Team,
 ) -> Option<f32> {
     if planes.is_empty() {
         return room;
     }
     let mut room = room;
     for r in 0..PLANE_ROUNDS {
-        let pushed = project_planes(planes, lane, lanes);
+        let pushed = project_planes(planes, lane, lanes, team);
         if pushed == 0.0 {
             break;
         }
@@ -319,28 +387,46 @@ fn hold_planes(
             room = limit_stretch(plan, lanes, factor, team).1;
         }
     }
-    let mut farthest = 0.0f32;
-    let [lx, ly, lz, sx, sy, sz, _] = lanes.arrays_mut();
-    for (k, &at) in lane.iter().enumerate() {
-        let depth = planes.depth[k];
-        if depth <= 0.0 {
-            continue;
+    let ContactPlanes {
+        normal,
+        depth,
+        friction,
+        ..
+    } = &*planes;
+    let count = lane.len();
+    assert!(normal.len() == count && depth.len() == count && friction.len() == count);
+    let [lx, ly, lz, sx, sy, sz, _] = lanes.disjoint();
+    let n_lanes = lx.len();
+    let [px, py, pz, qx, qy, qz] = [lx, ly, lz, sx, sy, sz].map(|a| SendPtr(a.as_ptr()));
+    let farthest = for_plane_chunks(count, team, |range| {
+        let mut farthest = 0.0f32;
+        for k in range {
+            if depth[k] <= 0.0 {
+                continue;
+            }
+            let at = lane[k] as usize;
+            assert!(at < n_lanes);
+            let n = normal[k];
+            // SAFETY: in bounds (asserted); lane `at` is this plane's
+            // alone, so no other thread reads or writes it meanwhile.
+            unsafe {
+                let p = Vector::new(*px.at(at), *py.at(at), *pz.at(at));
+                let start = Vector::new(*qx.at(at), *qy.at(at), *qz.at(at));
+                let slide = p - start;
+                let tangent = slide - n * n.dot(slide);
+                let (length, allowed) = (tangent.length(), friction[k] * depth[k]);
+                let undone = if length <= allowed {
+                    tangent
+                } else {
+                    tangent * (allowed / length)
+                };
+                let q = p - undone;
+                (*px.at(at), *py.at(at), *pz.at(at)) = (q.x, q.y, q.z);
+                farthest = farthest.max(length.min(allowed));
+            }
         }
-        let at = at as usize;
-        let n = planes.normal[k];
-        let p = Vector::new(lx[at], ly[at], lz[at]);
-        let slide = p - Vector::new(sx[at], sy[at], sz[at]);
-        let tangent = slide - n * n.dot(slide);
-        let (length, allowed) = (tangent.length(), planes.friction[k] * depth);
-        let undone = if length <= allowed {
-            tangent
-        } else {
-            tangent * (allowed / length)
-        };
-        let q = p - undone;
-        (lx[at], ly[at], lz[at]) = (q.x, q.y, q.z);
-        farthest = farthest.max(length.min(allowed));
-    }
+        farthest
+    });
     room.map(|room| room - 2.0 * farthest)
         .filter(|&room| room > 0.0)
 }
