@@ -64,12 +64,14 @@ impl CollisionStage {
     /// may be reached within the substep (its gap over the thickness under
     /// twice the particle's motion at `v` plus the thickness). The plane is
     /// the one the particle pass found, unless the particle has moved inside
-    /// it since: then it is looked up afresh where the particle is.
+    /// it since, or the substep is a step's `first` (the obstacles handed
+    /// to this step need not be the last step's): then it is looked up
+    /// afresh where the particle is.
     pub(crate) fn contact_planes(
         &self,
         (x, v, inv_mass): (&[Vector], &[Vector], &[f32]),
         obstacles: &[Obstacle],
-        (h, thickness): (f32, f32),
+        (h, thickness, first): (f32, f32, bool),
         planes: &mut ContactPlanes,
     ) {
         planes.clear();
@@ -93,11 +95,15 @@ impl CollisionStage {
             let (mut normal, mut offset) = (self.normal[i], self.surface[i] + thickness);
             // Moved inside the plane since the particle pass (by the edge
             // pass or the stretch hold, perhaps round an edge onto another
-            // face): the obstacle's plane where the particle is now.
-            if normal.dot(x[i]) < offset - PLANE_SLACK {
+            // face), or another step's obstacle: its plane where the
+            // particle is now.
+            if first || normal.dot(x[i]) < offset - PLANE_SLACK {
                 let Some(hit) = self.tracks.contact(obstacles, o, x[i]) else {
                     continue;
                 };
+                if hit.signed_distance - thickness > reach {
+                    continue;
+                }
                 (normal, offset) = (hit.normal, hit.normal.dot(hit.point) + thickness);
             }
             planes.particle.push(i as u32);

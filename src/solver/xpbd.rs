@@ -99,7 +99,7 @@ pub(crate) fn step(
     collision.contact_planes(
         (x, v, model.inv_mass),
         sub.obstacles,
-        (h, sub.ctx.thickness),
+        (h, sub.ctx.thickness, sub.ctx.substep == 0),
         &mut ws.planes,
     );
     let calm = model.wind.is_calm();
