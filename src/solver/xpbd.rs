@@ -5,6 +5,10 @@
 //! colour-ordered Gauss–Seidel sweep per substep. Many cheap substeps beat
 //! few expensive ones: stiffness converges with the substep count, and
 //! every substep meets the obstacles (the collision stage runs after each).
+//! On a grid, contacts with still obstacles with edges are also held inside
+//! the substep: each particle near one stays on the tangent plane it
+//! started on (`collision/contact_planes.rs`) after the chains, each sweep
+//! and rounds of the stretch limit, with Coulomb friction at the end.
 //!
 //! A substep of `h` seconds: predict `v += h (g − drag v + f_wind / m)`,
 //! `x += h v`; for each spring, `C = |x_b − x_a| − L`, `α = 1/(k h²)`,
