@@ -15,25 +15,25 @@ use crate::math::Vector;
 
 /// One substep's contact planes, as a flat list.
 #[derive(Debug, Default)]
-pub struct ContactPlanes {
+pub(crate) struct ContactPlanes {
     /// The particle of each plane.
-    pub particle: Vec<u32>,
+    pub(crate) particle: Vec<u32>,
     /// Its unit outward normal.
-    pub normal: Vec<Vector>,
+    pub(crate) normal: Vec<Vector>,
     /// Its offset (m): the particle must keep `normal · x ≥ offset`.
-    pub offset: Vec<f32>,
+    pub(crate) offset: Vec<f32>,
     /// How far (m) the projections pushed it along the normal, summed
     /// over the substep (the normal "impulse" friction is bounded by).
-    pub depth: Vec<f32>,
+    pub(crate) depth: Vec<f32>,
     /// The obstacle's friction coefficient.
-    pub friction: Vec<f32>,
+    pub(crate) friction: Vec<f32>,
     /// Per obstacle: whether its contacts are held as planes.
     held: Vec<bool>,
 }
 
 impl ContactPlanes {
     /// Removes every plane.
-    pub fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         self.particle.clear();
         self.normal.clear();
         self.offset.clear();
@@ -41,13 +41,8 @@ impl ContactPlanes {
         self.friction.clear();
     }
 
-    /// The number of planes.
-    pub fn len(&self) -> usize {
-        self.particle.len()
-    }
-
     /// Whether there are none.
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.particle.is_empty()
     }
 }

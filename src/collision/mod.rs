@@ -31,7 +31,7 @@ mod stretch_incidence;
 mod tracks;
 
 pub use contact::{contact, penetration_depth, Contact};
-pub use contact_planes::ContactPlanes;
+pub(crate) use contact_planes::ContactPlanes;
 pub use contact_set::{ContactSet, ParticleContact};
 pub use obstacle::{DynamicBody, Obstacle, ObstacleImpulse};
 pub use response::{respond, FrictionPolicy, Response};

@@ -164,7 +164,7 @@ impl ClothSolver {
     /// sweeps' own count if one moves. Measured (BENCHMARKS.md, sixteenth
     /// and seventeenth sessions): a 48 × 48 cotton tablecloth dropped on a
     /// table peaked at 12.3% stretch with the chains' 9 substeps and no
-    /// planes, 4.56% at 32 with them (4.53% at the sweeps' 41); the drape
+    /// planes, 4.58% at 32 with them (4.53% at the sweeps' 41); the drape
     /// over a ball stays under 5% at 12.
     pub fn substeps_among(&self, cloth: &Cloth, obstacles: &[Obstacle], dt: f32) -> u32 {
         let lengthened =
