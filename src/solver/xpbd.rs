@@ -303,11 +303,7 @@ fn project_planes(planes: &mut ContactPlanes, lane: &[u32], lanes: &mut Lanes, t
     assert!(normal.len() == count && offset.len() == count && depth.len() == count);
     let [lx, ly, lz, ..] = lanes.disjoint();
     let n_lanes = lx.len();
-    let (px, py, pz) = (lx.as_ptr(), ly.as_ptr(), lz.as_ptr());
-    let (depth, (px, py, pz)) = (
-        Disjoint::new(&mut depth[..]),
-        (SendPtr(px), SendPtr(py), SendPtr(pz)),
-    );
+    let depth = Disjoint::new(&mut depth[..]);
     for_plane_chunks(count, team, |range| {
         // SAFETY: chunks are disjoint ranges of planes.
         let depth = unsafe { depth.range(range.clone()) };
@@ -319,11 +315,19 @@ fn project_planes(planes: &mut ContactPlanes, lane: &[u32], lanes: &mut Lanes, t
             // SAFETY: in bounds (asserted); lane `at` is this plane's
             // alone, so no other thread reads or writes it meanwhile.
             unsafe {
-                let p = Vector::new(*px.at(at), *py.at(at), *pz.at(at));
+                let p = Vector::new(
+                    *lx.as_ptr().add(at),
+                    *ly.as_ptr().add(at),
+                    *lz.as_ptr().add(at),
+                );
                 let gap = n.dot(p) - offset[k];
                 if gap < 0.0 {
                     let q = p - n * gap;
-                    (*px.at(at), *py.at(at), *pz.at(at)) = (q.x, q.y, q.z);
+                    (
+                        *lx.as_ptr().add(at),
+                        *ly.as_ptr().add(at),
+                        *lz.as_ptr().add(at),
+                    ) = (q.x, q.y, q.z);
                     *d -= gap;
                     farthest = farthest.max(-gap);
                 }
@@ -332,28 +336,6 @@ fn project_planes(planes: &mut ContactPlanes, lane: &[u32], lanes: &mut Lanes, t
         farthest
     })
 }
-
-/// A pointer threads may share: [`project_planes`] and [`hold_planes`]
-/// write through it only at lanes of their own planes.
-#[derive(Clone, Copy)]
-struct SendPtr(*mut f32);
-impl SendPtr {
-    /// The pointer `at` elements on (through a method, so that closures
-    /// capture the whole `SendPtr`, not its raw field).
-    ///
-    /// # Safety
-    /// As [`pointer::add`].
-    #[inline(always)]
-    unsafe fn at(self, at: usize) -> *mut f32 {
-        // SAFETY: the caller's.
-        unsafe { self.0.add(at) }
-    }
-}
-
-// SAFETY: see the type's doc: every element is reached from one thread.
-unsafe impl Send for SendPtr {}
-// SAFETY: as above.
-unsafe impl Sync for SendPtr {}
 
 /// Rounds of the contact planes against the stretch limit after the sweeps:
 /// each pushes the particles back onto their planes, and all but the last
@@ -401,7 +383,6 @@ fn hold_planes(
     assert!(normal.len() == count && depth.len() == count && friction.len() == count);
     let [lx, ly, lz, sx, sy, sz, _] = lanes.disjoint();
     let n_lanes = lx.len();
-    let [px, py, pz, qx, qy, qz] = [lx, ly, lz, sx, sy, sz].map(|a| SendPtr(a.as_ptr()));
     let farthest = for_plane_chunks(count, team, |range| {
         let mut farthest = 0.0f32;
         for k in range {
@@ -414,8 +395,16 @@ fn hold_planes(
             // SAFETY: in bounds (asserted); lane `at` is this plane's
             // alone, so no other thread reads or writes it meanwhile.
             unsafe {
-                let p = Vector::new(*px.at(at), *py.at(at), *pz.at(at));
-                let start = Vector::new(*qx.at(at), *qy.at(at), *qz.at(at));
+                let p = Vector::new(
+                    *lx.as_ptr().add(at),
+                    *ly.as_ptr().add(at),
+                    *lz.as_ptr().add(at),
+                );
+                let start = Vector::new(
+                    *sx.as_ptr().add(at),
+                    *sy.as_ptr().add(at),
+                    *sz.as_ptr().add(at),
+                );
                 let slide = p - start;
                 let tangent = slide - n * n.dot(slide);
                 let (length, allowed) = (tangent.length(), friction[k] * depth[k]);
@@ -425,7 +414,11 @@ fn hold_planes(
                     tangent * (allowed / length)
                 };
                 let q = p - undone;
-                (*px.at(at), *py.at(at), *pz.at(at)) = (q.x, q.y, q.z);
+                (
+                    *lx.as_ptr().add(at),
+                    *ly.as_ptr().add(at),
+                    *lz.as_ptr().add(at),
+                ) = (q.x, q.y, q.z);
                 farthest = farthest.max(length.min(allowed));
             }
         }
