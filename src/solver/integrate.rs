@@ -22,6 +22,10 @@ pub(crate) struct SubstepOutcome {
     /// limit: how much (m) any of them may still lengthen before it
     /// reaches it (`None`: not known).
     pub stretch_room: Option<f32>,
+    /// The integrator held every obstacle's contacts inside the substep
+    /// (xpbd's lanes, `lane_contacts.rs`): the collision stage may wait
+    /// for the step's last substep.
+    pub contacts_held: bool,
 }
 
 /// Advances positions `x` and velocities `v` by one substep with the
@@ -40,11 +44,13 @@ pub(crate) fn integrate(
         iterations,
         friction: FrictionPolicy::Apply,
         stretch_room: None,
+        contacts_held: false,
     };
     let solved = |iterations| SubstepOutcome {
         iterations,
         friction: FrictionPolicy::AlreadySolved,
         stretch_room: None,
+        contacts_held: false,
     };
     Ok(match sub.settings.integrator {
         Integrator::ExplicitEuler => {
@@ -63,10 +69,14 @@ pub(crate) fn integrate(
             rk4::step(model, x, v, &mut ws.explicit, h);
             explicit(0)
         }
-        Integrator::Xpbd => SubstepOutcome {
-            stretch_room: xpbd::step(sub, x, v, &mut ws.xpbd, &ws.collision),
-            ..explicit(0)
-        },
+        Integrator::Xpbd => {
+            let outcome = xpbd::step(sub, x, v, &mut ws.xpbd, &ws.collision);
+            SubstepOutcome {
+                stretch_room: outcome.stretch_room,
+                contacts_held: outcome.contacts_held,
+                ..explicit(0)
+            }
+        }
         Integrator::ImplicitEuler => solved(implicit_euler::step(
             sub,
             x,

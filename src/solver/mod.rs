@@ -14,6 +14,7 @@ mod grid_sweep;
 mod implicit_euler;
 mod integrate;
 mod integrator;
+mod lane_contacts;
 mod ordering;
 mod preconditioner;
 mod report;

@@ -20,7 +20,10 @@ pub struct StepReport {
     pub substeps: u32,
     /// Solver iterations over the whole step (0 for explicit integrators).
     pub iterations: u32,
-    /// Particle–obstacle contacts resolved, summed over substeps.
+    /// Particle–obstacle contacts the collision stage resolved, summed over
+    /// the substeps it ran: every substep, but only the last when the
+    /// integrator held every contact itself (xpbd among still balls and
+    /// half-spaces).
     pub contacts: u32,
     /// Particle–triangle contacts within the cloth resolved, summed over
     /// substeps (0 without self-collision).

@@ -11,7 +11,9 @@
 //!               substep) → stretch limit (solvers that do not hold it in
 //!               their own substep, and every solver with self-collision)
 //!               → tethers (cloths with them) → resolve contacts (with the
-//!               friction policy the integrator handed back) → the stretch
+//!               friction policy the integrator handed back; at the last
+//!               substep only, when the integrator held every contact
+//!               itself: xpbd among still balls and planes) → the stretch
 //!               limit once more, against the contacts
 //! divergence check → roll back and report, or commit the time
 //!     → tearing (cloths whose material tears: split the particles at the
@@ -302,6 +304,16 @@ impl ClothSolver {
                 ws.tethers.hold(&mut cloth.particles);
             }
             watch.lap(&mut times.constraints);
+            // The integrator held every contact inside the substep (and
+            // nothing moved the particles since): the collision stage's
+            // exact pass waits for the step's last substep.
+            let held = outcome.contacts_held
+                && substep + 1 < k
+                && !cloth.params.self_collision
+                && !cloth.params.tethers;
+            if held {
+                continue;
+            }
             // Resolve contacts, by the friction policy the integrator handed back.
             report.contacts += ws.collision.resolve(
                 &ctx,

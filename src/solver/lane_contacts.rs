@@ -1,0 +1,657 @@
+//! Contacts with still balls and half-spaces (a ball on a stand, a floor)
+//! held inside the small-steps solver's substeps, in its grid lanes. The
+//! collision stage after a substep visits every particle near an obstacle
+//! through its general pass (candidates, exact contact, tracing, friction,
+//! impulses): at N = 128 on the `drape`'s ball that was a third of the
+//! frame, paid every substep. A still ball's or plane's contact is a few
+//! vector operations a lane, so xpbd puts every particle back out of them
+//! itself after the chains, each sweep and the stretch limit, and applies
+//! Coulomb friction by how far it pushed; the collision stage then runs
+//! only at the step's last substep (the schedule skips it before, see
+//! [`LaneContacts::holds`]), where its exact pass, edge pass and stretch
+//! hold leave the frame as every other integrator's.
+//!
+//! Every lane is looked at, not a list of candidates: a branchless vector
+//! pass over the lanes is cheaper than gathering candidates, and misses no
+//! particle whatever its speed. A particle is put back through the nearest
+//! point of the surface: against a still shape over a substep's motion (a
+//! few millimetres) that is the side it came in by; a ball must be several
+//! times larger than the substep's fastest motion ([`BALL_MOTIONS`]), or
+//! the collision stage, which traces paths, keeps it.
+
+use crate::collision::Obstacle;
+use crate::math::{simd_available, Vector};
+use crate::parallel::{Disjoint, Team};
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use super::grid_sweep::Lanes;
+
+/// Lanes per chunk of a pass, a chunk to a thread.
+const CHUNK: usize = 2048;
+
+/// A ball's radius must be over this many times the farthest a particle
+/// moves in the substep for the lanes to hold it: a particle is put back
+/// through the nearest point of the surface, which is the side it came in
+/// by only while it has not come near the centre (the collision stage
+/// traces a particle's path back instead). A particle can also be moved
+/// by the sweeps beyond its own motion, hence a wide margin.
+pub(crate) const BALL_MOTIONS: f32 = 4.0;
+
+/// One still shape, as its lanes pass takes it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum StillShape {
+    /// A ball: centre (m) and radius plus the thickness (m).
+    Ball { centre: Vector, reach: f32 },
+    /// A half-space: outward unit normal, and the offset (m) of its
+    /// boundary moved out by the thickness (`n · x = offset` on it).
+    Plane { normal: Vector, offset: f32 },
+}
+
+/// The still smooth obstacles of a substep and what the lanes passes
+/// record of them: per lane, how far (m) the passes pushed it this substep
+/// and which obstacle last did (its index plus one, 0 for none).
+#[derive(Debug, Default)]
+pub(crate) struct LaneContacts {
+    shapes: Vec<StillShape>,
+    friction: Vec<f32>,
+    depth: Vec<f32>,
+    touch: Vec<u32>,
+}
+
+impl LaneContacts {
+    /// Whether the lanes hold the contacts of every one of `obstacles`
+    /// (and there is one) for a substep in which no particle moves
+    /// further than `motion` (m): each is still (no rapier body, no
+    /// velocity) and a half-space, or a ball of a radius over
+    /// [`BALL_MOTIONS`] times `motion`. The collision stage then need not
+    /// run after a substep but the last.
+    pub fn holds(obstacles: &[Obstacle], motion: f32) -> bool {
+        !obstacles.is_empty()
+            && obstacles.iter().all(|o| {
+                let shape = &o.shape;
+                let fits = match shape.as_ball() {
+                    Some(ball) => ball.radius > BALL_MOTIONS * motion,
+                    None => shape.as_halfspace().is_some(),
+                };
+                o.is_still() && fits
+            })
+    }
+
+    /// Takes `obstacles` for a substep of `n` lanes in which no particle
+    /// moves further than `motion` (m), their surfaces moved out by
+    /// `thickness` (m); clears every lane's record. Returns whether it
+    /// holds them ([`Self::holds`]); if not, it holds none.
+    pub fn begin(
+        &mut self,
+        obstacles: &[Obstacle],
+        (thickness, motion): (f32, f32),
+        n: usize,
+    ) -> bool {
+        self.shapes.clear();
+        self.friction.clear();
+        if !Self::holds(obstacles, motion) {
+            return false;
+        }
+        for o in obstacles {
+            let shape = if let Some(ball) = o.shape.as_ball() {
+                StillShape::Ball {
+                    centre: o.pose.translation,
+                    reach: ball.radius + thickness,
+                }
+            } else if let Some(half) = o.shape.as_halfspace() {
+                let normal = (o.pose.rotation * half.normal).normalize();
+                StillShape::Plane {
+                    normal,
+                    offset: normal.dot(o.pose.translation) + thickness,
+                }
+            } else {
+                unreachable!("`holds` took only balls and half-spaces")
+            };
+            self.shapes.push(shape);
+            self.friction.push(o.friction);
+        }
+        self.depth.clear();
+        self.depth.resize(n, 0.0);
+        self.touch.clear();
+        self.touch.resize(n, 0);
+        true
+    }
+
+    /// Whether there is anything to hold this substep.
+    pub fn is_empty(&self) -> bool {
+        self.shapes.is_empty()
+    }
+
+    /// Puts every free lane (inverse mass not zero) back out of every
+    /// shape, through its nearest point, and records the push. Returns the
+    /// farthest it pushed a lane (m).
+    pub fn project(&mut self, lanes: &mut Lanes, team: Team) -> f32 {
+        self.pass(lanes, team, false)
+    }
+
+    /// [`Self::project`], then Coulomb friction on every lane a pass
+    /// pushed this substep: its slide over the substep along the surface
+    /// (the shapes are still) is undone up to the coefficient times how
+    /// far the passes pushed it. One pass: the push's normals are the
+    /// friction's. Returns the farthest it pushed a lane (m).
+    pub fn project_with_friction(&mut self, lanes: &mut Lanes, team: Team) -> f32 {
+        self.pass(lanes, team, true)
+    }
+
+    /// [`Self::project`], with friction when `friction`.
+    fn pass(&mut self, lanes: &mut Lanes, team: Team, friction: bool) -> f32 {
+        if self.is_empty() {
+            return 0.0;
+        }
+        let [lx, ly, lz, sx, sy, sz, lw] = lanes.disjoint();
+        let (depth, touch) = (
+            Disjoint::new(&mut self.depth[..]),
+            Disjoint::new(&mut self.touch[..]),
+        );
+        let law = Law {
+            shapes: &self.shapes,
+            friction: friction.then_some(&self.friction[..]),
+        };
+        let simd = simd_available();
+        for_chunks(lx.len(), team, |range| {
+            // SAFETY: chunks are disjoint ranges of lanes; the start
+            // positions and inverse masses are only read.
+            let chunk = unsafe {
+                let [x, y, z, sx, sy, sz, w] =
+                    [lx, ly, lz, sx, sy, sz, lw].map(|a| a.range(range.clone()));
+                Chunk {
+                    x,
+                    y,
+                    z,
+                    start: [&*sx, &*sy, &*sz],
+                    w: &*w,
+                    depth: depth.range(range.clone()),
+                    touch: touch.range(range.clone()),
+                }
+            };
+            run(chunk, &law, simd)
+        })
+    }
+}
+
+/// What a pass applies: the shapes, and the friction coefficient of each
+/// when it applies friction.
+struct Law<'a> {
+    shapes: &'a [StillShape],
+    friction: Option<&'a [f32]>,
+}
+
+/// A chunk of lanes: positions now and at the substep's start (m),
+/// inverse masses (1/kg), and the record of the pushes.
+struct Chunk<'a> {
+    x: &'a mut [f32],
+    y: &'a mut [f32],
+    z: &'a mut [f32],
+    start: [&'a [f32]; 3],
+    w: &'a [f32],
+    depth: &'a mut [f32],
+    touch: &'a mut [u32],
+}
+
+/// [`run_lanes`], vectorised for AVX2 when `simd` (the same operations
+/// lane by lane, no fused multiply-add: the same bits).
+fn run(chunk: Chunk, law: &Law, simd: bool) -> f32 {
+    #[cfg(target_arch = "x86_64")]
+    if simd {
+        // SAFETY: `simd` only when the CPU has AVX2.
+        return unsafe { run_avx2(chunk, law) };
+    }
+    let _ = simd;
+    run_lanes(chunk, law)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn run_avx2(chunk: Chunk, law: &Law) -> f32 {
+    run_lanes(chunk, law)
+}
+
+/// Lanes of one vector step of [`run_lanes`] (AVX2's eight `f32`).
+const W: usize = 8;
+
+/// Eight lanes of a chunk, copied into registers: positions now and at
+/// the substep's start (m), inverse masses, pushes (m) and marks.
+#[derive(Clone, Copy)]
+struct Eight {
+    p: [[f32; W]; 3],
+    start: [[f32; W]; 3],
+    w: [f32; W],
+    depth: [f32; W],
+    touch: [u32; W],
+}
+
+/// The pass of `law` over the lanes of `c`, eight at a time on copies in
+/// registers, written back whole (as one loop over lanes, or through
+/// references the compiler could not prove apart, it stayed scalar: a
+/// quarter of the frame at N = 64). The last, short step runs on copies
+/// padded with pinned lanes. Returns the farthest push (m).
+#[inline(always)]
+fn run_lanes(c: Chunk, law: &Law) -> f32 {
+    let n = c.x.len();
+    assert!(
+        [
+            c.y.len(),
+            c.z.len(),
+            c.w.len(),
+            c.depth.len(),
+            c.touch.len()
+        ] == [n; 5]
+    );
+    assert!(c.start.iter().all(|s| s.len() == n));
+    let mut farthest = [0.0f32; W];
+    let mut k = 0;
+    while k < n {
+        let m = W.min(n - k);
+        let mut e = Eight {
+            p: [[0.0; W]; 3],
+            start: [[0.0; W]; 3],
+            w: [0.0; W],
+            depth: [0.0; W],
+            touch: [0; W],
+        };
+        if m == W {
+            e.p = [
+                c.x[k..k + W].try_into().expect("eight"),
+                c.y[k..k + W].try_into().expect("eight"),
+                c.z[k..k + W].try_into().expect("eight"),
+            ];
+            if law.friction.is_some() {
+                for a in 0..3 {
+                    e.start[a] = c.start[a][k..k + W].try_into().expect("eight");
+                }
+            }
+            e.w = c.w[k..k + W].try_into().expect("eight");
+            e.depth = c.depth[k..k + W].try_into().expect("eight");
+            e.touch = c.touch[k..k + W].try_into().expect("eight");
+        } else {
+            e.p[0][..m].copy_from_slice(&c.x[k..n]);
+            e.p[1][..m].copy_from_slice(&c.y[k..n]);
+            e.p[2][..m].copy_from_slice(&c.z[k..n]);
+            for a in 0..3 {
+                e.start[a][..m].copy_from_slice(&c.start[a][k..n]);
+            }
+            e.w[..m].copy_from_slice(&c.w[k..n]);
+            e.depth[..m].copy_from_slice(&c.depth[k..n]);
+            e.touch[..m].copy_from_slice(&c.touch[k..n]);
+        }
+        eight(&mut e, law, &mut farthest);
+        let out = &e;
+        if m == W {
+            // Stores of a known length, in registers (`copy_from_slice`
+            // of a run of unknown length calls `memmove`: 14% of the
+            // frame at N = 64).
+            *whole(&mut c.x[k..k + W]) = out.p[0];
+            *whole(&mut c.y[k..k + W]) = out.p[1];
+            *whole(&mut c.z[k..k + W]) = out.p[2];
+            *whole(&mut c.depth[k..k + W]) = out.depth;
+            let touch: &mut [u32; W] = (&mut c.touch[k..k + W]).try_into().expect("eight");
+            *touch = out.touch;
+        } else {
+            c.x[k..n].copy_from_slice(&out.p[0][..m]);
+            c.y[k..n].copy_from_slice(&out.p[1][..m]);
+            c.z[k..n].copy_from_slice(&out.p[2][..m]);
+            c.depth[k..n].copy_from_slice(&out.depth[..m]);
+            c.touch[k..n].copy_from_slice(&out.touch[..m]);
+        }
+        k += m;
+    }
+    farthest.into_iter().fold(0.0, f32::max)
+}
+
+/// `run` as an array of eight lanes.
+#[inline(always)]
+fn whole(run: &mut [f32]) -> &mut [f32; W] {
+    run.try_into().expect("eight lanes")
+}
+
+/// [`run_lanes`] on eight lanes, without branches (in place: moving the
+/// lanes in and out by value was a `memmove` call); keeps in `farthest`
+/// the farthest push of each.
+#[inline(always)]
+fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
+    // Each lane's normal and friction coefficient: those of the shape
+    // that last pushed it (zero for none).
+    let mut normal = [[0.0f32; W]; 3];
+    let mut mu = [0.0f32; W];
+    for (o, &shape) in law.shapes.iter().enumerate() {
+        let mark = o as u32 + 1;
+        let mut to = [[0.0f32; W]; 3];
+        let mut n = [[0.0f32; W]; 3];
+        let mut push = [0.0f32; W];
+        let mut inside = [false; W];
+        match shape {
+            StillShape::Ball { centre, reach } => {
+                for k in 0..W {
+                    let d = [
+                        e.p[0][k] - centre.x,
+                        e.p[1][k] - centre.y,
+                        e.p[2][k] - centre.z,
+                    ];
+                    let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                    let length = d2.sqrt();
+                    let recip = 1.0 / length;
+                    // At the centre itself: out through the top.
+                    let at_centre = d2 == 0.0;
+                    let c = [centre.x, centre.y, centre.z];
+                    for a in 0..3 {
+                        let up = if a == 1 { 1.0 } else { 0.0 };
+                        n[a][k] = if at_centre { up } else { d[a] * recip };
+                        to[a][k] = c[a] + n[a][k] * reach;
+                    }
+                    inside[k] = (length < reach) & (e.w[k] != 0.0);
+                    push[k] = if inside[k] { reach - length } else { 0.0 };
+                }
+            }
+            StillShape::Plane { normal: m, offset } => {
+                let m = [m.x, m.y, m.z];
+                for k in 0..W {
+                    let gap = offset - (m[0] * e.p[0][k] + m[1] * e.p[1][k] + m[2] * e.p[2][k]);
+                    for a in 0..3 {
+                        n[a][k] = m[a];
+                        to[a][k] = e.p[a][k] + m[a] * gap;
+                    }
+                    inside[k] = (gap > 0.0) & (e.w[k] != 0.0);
+                    push[k] = if inside[k] { gap } else { 0.0 };
+                }
+            }
+        }
+        let coefficient = law.friction.map_or(0.0, |f| f[o]);
+        for k in 0..W {
+            for a in 0..3 {
+                e.p[a][k] = if inside[k] { to[a][k] } else { e.p[a][k] };
+            }
+            e.depth[k] += push[k];
+            e.touch[k] = if inside[k] { mark } else { e.touch[k] };
+            farthest[k] = farthest[k].max(push[k]);
+            let this = e.touch[k] == mark;
+            for a in 0..3 {
+                normal[a][k] = if this { n[a][k] } else { normal[a][k] };
+            }
+            mu[k] = if this { coefficient } else { mu[k] };
+        }
+    }
+    if law.friction.is_none() {
+        return;
+    }
+    for k in 0..W {
+        let slide = [
+            e.p[0][k] - e.start[0][k],
+            e.p[1][k] - e.start[1][k],
+            e.p[2][k] - e.start[2][k],
+        ];
+        let n = [normal[0][k], normal[1][k], normal[2][k]];
+        let along = n[0] * slide[0] + n[1] * slide[1] + n[2] * slide[2];
+        let tangent = [
+            slide[0] - n[0] * along,
+            slide[1] - n[1] * along,
+            slide[2] - n[2] * along,
+        ];
+        let length =
+            (tangent[0] * tangent[0] + tangent[1] * tangent[1] + tangent[2] * tangent[2]).sqrt();
+        let allowed = mu[k] * e.depth[k];
+        let whole = length <= allowed;
+        let scale = allowed / length;
+        let touched = e.touch[k] != 0;
+        for a in 0..3 {
+            let undone = if whole {
+                tangent[a]
+            } else {
+                tangent[a] * scale
+            };
+            e.p[a][k] = if touched {
+                e.p[a][k] - undone
+            } else {
+                e.p[a][k]
+            };
+        }
+    }
+}
+
+/// Runs `f` on every chunk of [`CHUNK`] lanes of `count` (on the `team`'s
+/// threads from two chunks on) and returns the largest of what it returns
+/// (non-negative): the same whatever the order.
+fn for_chunks(count: usize, team: Team, f: impl Fn(std::ops::Range<usize>) -> f32 + Sync) -> f32 {
+    let largest = AtomicU32::new(0);
+    let chunks = count.div_ceil(CHUNK);
+    team.for_work(count, 2 * CHUNK).sum_count(chunks, |c| {
+        let got = f(c * CHUNK..((c + 1) * CHUNK).min(count));
+        // Non-negative floats order as their bits do.
+        largest.fetch_max(got.max(0.0).to_bits(), Ordering::Relaxed);
+        0
+    });
+    f32::from_bits(largest.into_inner())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::DynamicBody;
+    use crate::math::Pose;
+    use parry3d::shape::SharedShape;
+
+    const THICKNESS: f32 = 0.01;
+
+    /// A ball of radius 0.5 at (0, 1, 0) over a floor at y = 0.
+    fn ball_and_floor() -> [Obstacle; 2] {
+        let ball = Obstacle::ball(Vector::new(0.0, 1.0, 0.0), 0.5).with_friction(0.4);
+        let floor = Obstacle::new(SharedShape::halfspace(Vector::Y), Pose::IDENTITY);
+        [ball, floor.with_friction(0.8)]
+    }
+
+    /// `n` lanes scattered around the ball and through the floor (some at
+    /// the ball's centre, every fifth pinned): positions, then start
+    /// positions a little above.
+    fn lanes(n: usize) -> Lanes {
+        let mut lanes = Lanes::default();
+        lanes.resize(n);
+        let [x, y, z, sx, sy, sz, w] = lanes.arrays_mut();
+        for k in 0..n {
+            let s = k as f32;
+            let dir = Vector::new((1.3 * s).sin(), (0.7 * s).cos(), (2.1 * s).sin()).normalize();
+            let p = Vector::new(0.0, 1.0, 0.0) + dir * (0.2 + 0.5 * ((0.37 * s) % 1.0));
+            let p = if k % 9 == 4 {
+                Vector::new(0.0, 1.0, 0.0)
+            } else {
+                p
+            };
+            let p = if k % 7 == 2 {
+                Vector::new(0.1 * s % 1.0, -0.02, 0.3)
+            } else {
+                p
+            };
+            (x[k], y[k], z[k]) = (p.x, p.y, p.z);
+            (sx[k], sy[k], sz[k]) = (p.x + 0.003, p.y + 0.004, p.z - 0.002);
+            w[k] = if k % 5 == 0 { 0.0 } else { 2.0 };
+        }
+        lanes
+    }
+
+    fn bits(lanes: &mut Lanes) -> Vec<u32> {
+        lanes
+            .arrays_mut()
+            .iter()
+            .flat_map(|a| a.iter().map(|v| v.to_bits()))
+            .collect()
+    }
+
+    /// Every free lane ends out of the ball and above the floor by the
+    /// thickness, through the nearest point (at the centre: the top);
+    /// pinned lanes and lanes already out keep their bits; the records say
+    /// how far each was pushed and by which; the portable and the AVX2
+    /// passes agree to the bit.
+    #[test]
+    fn projection_puts_every_free_lane_out_and_records_the_push() {
+        // Four chunks and a short vector step at the end.
+        let n = 3 * CHUNK + 13;
+        let obstacles = ball_and_floor();
+        let mut contacts = LaneContacts::default();
+        assert!(contacts.begin(&obstacles, (THICKNESS, 0.001), n));
+        let mut l = lanes(n);
+        let before = bits(&mut l);
+        let pushed = contacts.project(&mut l, Team::ALONE);
+        let [x, y, z, _, _, _, w] = l.arrays_mut();
+        let centre = Vector::new(0.0, 1.0, 0.0);
+        let (mut moved, mut deepest) = (0, 0.0f32);
+        for k in 0..n {
+            let p = Vector::new(x[k], y[k], z[k]);
+            let old = Vector::new(
+                f32::from_bits(before[k]),
+                f32::from_bits(before[n + k]),
+                f32::from_bits(before[2 * n + k]),
+            );
+            if w[k] == 0.0 {
+                assert_eq!(p, old, "pinned lane {k} moved");
+                assert_eq!(contacts.touch[k], 0);
+                continue;
+            }
+            let d = (p - centre).length();
+            assert!(
+                d >= 0.51 - 1e-5 && p.y >= THICKNESS - 1e-6,
+                "lane {k} at {p:?}"
+            );
+            let push = (p - old).length();
+            if push > 0.0 {
+                moved += 1;
+                assert!(contacts.touch[k] != 0, "lane {k} pushed, not marked");
+                deepest = deepest.max(push);
+                // Out through the nearest point: along the radius, or up
+                // (a push of a few ulps, from the rounding of a lane just
+                // at the surface, has no direction to speak of).
+                let dir = (p - old) / push;
+                let radial = (old - centre).normalize_or(Vector::Y);
+                assert!(
+                    push < 1e-5 || dir.dot(radial) > 0.999 || dir.dot(Vector::Y) > 0.999,
+                    "lane {k} pushed along {dir:?} from {old:?} to {p:?}"
+                );
+            } else {
+                assert_eq!(contacts.touch[k], 0, "lane {k} marked, not pushed");
+                assert_eq!(contacts.depth[k], 0.0);
+            }
+        }
+        assert!(moved > n / 4 && moved < n, "{moved} of {n} pushed");
+        assert!(
+            (pushed - deepest).abs() < 1e-5,
+            "{pushed} against {deepest}"
+        );
+        // The same passes lane by lane, without AVX2: the projection, then
+        // the projection with friction.
+        let mut portable = LaneContacts::default();
+        portable.begin(&obstacles, (THICKNESS, 0.001), n);
+        let mut m = lanes(n);
+        let portable_pass = |contacts: &mut LaneContacts, lanes: &mut Lanes, friction: bool| {
+            let [x, y, z, sx, sy, sz, w] = lanes.arrays_mut();
+            let law = Law {
+                shapes: &contacts.shapes,
+                friction: friction.then_some(&contacts.friction[..]),
+            };
+            let chunk = Chunk {
+                x,
+                y,
+                z,
+                start: [&*sx, &*sy, &*sz],
+                w: &*w,
+                depth: &mut contacts.depth,
+                touch: &mut contacts.touch,
+            };
+            run(chunk, &law, false)
+        };
+        let again = portable_pass(&mut portable, &mut m, false);
+        assert_eq!(again.to_bits(), pushed.to_bits());
+        assert_eq!(bits(&mut m), bits(&mut l));
+        assert_eq!(portable.depth, contacts.depth);
+        assert_eq!(portable.touch, contacts.touch);
+        // With friction: the same, and it moves only lanes a pass touched.
+        let untouched: Vec<usize> = (0..n).filter(|&k| contacts.touch[k] == 0).collect();
+        let before = bits(&mut l);
+        contacts.project_with_friction(&mut l, Team::ALONE);
+        portable_pass(&mut portable, &mut m, true);
+        let after = bits(&mut l);
+        assert_eq!(bits(&mut m), after);
+        assert!(after != before, "friction moved nothing");
+        for k in untouched {
+            for a in 0..3 {
+                assert_eq!(
+                    after[a * n + k],
+                    before[a * n + k],
+                    "untouched lane {k} moved"
+                );
+            }
+        }
+    }
+
+    /// A lane pushed 1 mm out of the floor that slid 10 mm along it keeps
+    /// 10 − μ mm of the slide (μ = 0.8 for the floor); with room to stop
+    /// (a slide under μ times the push) it stops where it started along
+    /// the floor.
+    #[test]
+    fn friction_undoes_the_slide_up_to_the_coefficient_times_the_push() {
+        let obstacles = ball_and_floor();
+        let mut contacts = LaneContacts::default();
+        let mut l = Lanes::default();
+        l.resize(2);
+        contacts.begin(&obstacles, (THICKNESS, 0.001), 2);
+        {
+            let [x, y, z, sx, sy, sz, w] = l.arrays_mut();
+            // Started at the thickness, now 1 mm inside it: slid 10 mm, 0.5 mm.
+            for (k, slide) in [0.010f32, 0.0005].into_iter().enumerate() {
+                (sx[k], sy[k], sz[k]) = (3.0, THICKNESS, 0.0);
+                (x[k], y[k], z[k]) = (3.0 + slide, THICKNESS - 0.001, 0.0);
+                w[k] = 1.0;
+            }
+        }
+        contacts.project_with_friction(&mut l, Team::ALONE);
+        assert_eq!(contacts.touch, [2, 2]);
+        let [x, y, ..] = l.arrays_mut();
+        assert!(
+            (x[0] - (3.0 + 0.010 - 0.8 * 0.001)).abs() < 1e-6,
+            "{}",
+            x[0]
+        );
+        assert!((x[1] - 3.0).abs() < 1e-6, "{}", x[1]);
+        assert!(y.iter().all(|&y| (y - THICKNESS).abs() < 1e-6));
+    }
+
+    /// The lanes hold still balls and half-spaces only, and no ball the
+    /// substep's motion could carry a particle far into.
+    #[test]
+    fn the_lanes_hold_still_balls_and_planes_only() {
+        let [ball, floor] = ball_and_floor();
+        assert!(LaneContacts::holds(&[ball.clone(), floor.clone()], 0.01));
+        assert!(!LaneContacts::holds(&[], 0.01), "nothing to hold");
+        assert!(
+            !LaneContacts::holds(std::slice::from_ref(&ball), 0.2),
+            "moves a radius in a few substeps"
+        );
+        assert!(
+            LaneContacts::holds(std::slice::from_ref(&floor), 10.0),
+            "a floor whatever the motion"
+        );
+        let moving = ball.clone().with_velocity(Vector::X, Vector::ZERO);
+        assert!(!LaneContacts::holds(&[moving, floor.clone()], 0.01));
+        let mut dynamic = ball.clone();
+        dynamic.body = Some(DynamicBody {
+            inverse_mass: Vector::ONE,
+            inverse_inertia: glam::Mat3::IDENTITY,
+            center_of_mass: Vector::Y,
+            acceleration: Vector::ZERO,
+        });
+        assert!(!LaneContacts::holds(&[dynamic], 0.01));
+        let table = Obstacle::cuboid(Vector::splat(0.5), Pose::IDENTITY);
+        assert!(
+            !LaneContacts::holds(&[ball, table.clone()], 0.01),
+            "edges: the planes and the stage"
+        );
+        // What it holds it holds whole, or nothing.
+        let mut contacts = LaneContacts::default();
+        assert!(
+            contacts.begin(std::slice::from_ref(&floor), (THICKNESS, 0.01), 4)
+                && !contacts.is_empty()
+        );
+        assert!(!contacts.begin(&[floor, table], (THICKNESS, 0.01), 4) && contacts.is_empty());
+    }
+}
