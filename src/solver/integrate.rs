@@ -30,11 +30,13 @@ pub(crate) struct SubstepOutcome {
 
 /// Advances positions `x` and velocities `v` by one substep with the
 /// settings' integrator. Contacts are the collision stage's: the methods
-/// that solve them read them and record the impulses they gave.
+/// that solve them read them and record the impulses they gave. `x_prev`
+/// holds the positions at the substep's start (the small-steps solver,
+/// whose state may stay in its lanes between substeps, writes it when it
+/// hands the state back).
 pub(crate) fn integrate(
     sub: &Substep,
-    x: &mut [Vector],
-    v: &mut [Vector],
+    (x, v, x_prev): (&mut [Vector], &mut [Vector], &mut [Vector]),
     state: &mut SolverState,
     ws: &mut Workspace,
 ) -> Result<SubstepOutcome, ClothError> {
@@ -70,7 +72,7 @@ pub(crate) fn integrate(
             explicit(0)
         }
         Integrator::Xpbd => {
-            let outcome = xpbd::step(sub, x, v, &mut ws.xpbd, &ws.collision);
+            let outcome = xpbd::step(sub, (x, v, x_prev), &mut ws.xpbd, &ws.collision);
             SubstepOutcome {
                 stretch_room: outcome.stretch_room,
                 contacts_held: outcome.contacts_held,

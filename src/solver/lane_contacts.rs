@@ -5,11 +5,14 @@
 //! impulses): at N = 128 on the `drape`'s ball that was a third of the
 //! frame, paid every substep. A still ball's or plane's contact is a few
 //! vector operations a lane, so xpbd puts every particle back out of them
-//! itself after the chains, each sweep and the stretch limit, and applies
-//! Coulomb friction by how far it pushed; the collision stage then runs
-//! only at the step's last substep (the schedule skips it before, see
+//! itself after the chains and after the last sweep, there with Coulomb
+//! friction by how far it pushed (and at the step's last substep once
+//! more after the stretch limit); the collision stage then runs only at
+//! the step's last substep (the schedule skips it before, see
 //! [`LaneContacts::holds`]), where its exact pass, edge pass and stretch
-//! hold leave the frame as every other integrator's.
+//! hold leave the frame as every other integrator's. While the contacts
+//! are held, the cloth's state stays in the lanes from one substep to the
+//! next (`xpbd.rs`).
 //!
 //! Every lane is looked at, not a list of candidates: a branchless vector
 //! pass over the lanes is cheaper than gathering candidates, and misses no

@@ -230,9 +230,9 @@ impl ClothSolver {
             let Particles {
                 x,
                 v,
+                x_prev,
                 mass,
                 inv_mass,
-                ..
             } = &mut cloth.particles;
             let sub = Substep {
                 ctx: &ctx,
@@ -251,7 +251,7 @@ impl ClothSolver {
                 team,
             };
             watch.lap(&mut times.contacts);
-            let outcome = match integrate(&sub, x, v, &mut self.state, ws) {
+            let outcome = match integrate(&sub, (x, v, x_prev), &mut self.state, ws) {
                 Ok(outcome) => outcome,
                 Err(e) => {
                     restore(cloth, ws);
