@@ -188,17 +188,8 @@ pub(crate) fn step(
                 let (g, drag) = (model.gravity, model.air_drag);
                 plan.for_each_band_from_zero(team, |band, _| {
                     // SAFETY: bands are disjoint ranges of lanes.
-                    let ([lx, ly, lz, sx, sy, sz, lw], [vx, vy, vz]) = unsafe {
-                        (
-                            lanes.map(|s| s.range(band.clone())),
-                            [vx, vy, vz].map(|s| s.range(band.clone())),
-                        )
-                    };
-                    let len = band.len();
-                    assert!(
-                        [lx.len(), ly.len(), lz.len(), sx.len(), sy.len(), sz.len()] == [len; 6]
-                    );
-                    assert!([lw.len(), vx.len(), vy.len(), vz.len()] == [len; 4]);
+                    let ([lx, ly, lz, sx, sy, sz, lw], [vx, vy, vz], len) =
+                        unsafe { band_state(lanes, [vx, vy, vz], band) };
                     let mut fast2 = [0.0f32; 8];
                     for k in 0..len {
                         let mut p = Vector::new(lx[k], ly[k], lz[k]);
@@ -314,17 +305,8 @@ pub(crate) fn step(
             if stay {
                 plan.for_each_band(team, |band| {
                     // SAFETY: bands are disjoint ranges of lanes.
-                    let ([lx, ly, lz, sx, sy, sz, lw], [vx, vy, vz]) = unsafe {
-                        (
-                            lanes.map(|s| s.range(band.clone())),
-                            [vx, vy, vz].map(|s| s.range(band.clone())),
-                        )
-                    };
-                    let len = band.len();
-                    assert!(
-                        [lx.len(), ly.len(), lz.len(), sx.len(), sy.len(), sz.len()] == [len; 6]
-                    );
-                    assert!([lw.len(), vx.len(), vy.len(), vz.len()] == [len; 4]);
+                    let ([lx, ly, lz, sx, sy, sz, lw], [vx, vy, vz], len) =
+                        unsafe { band_state(lanes, [vx, vy, vz], band) };
                     for k in 0..len {
                         let mut vk = Vector::new(vx[k], vy[k], vz[k]);
                         let predicted = Vector::new(sx[k], sy[k], sz[k]) + vk * h;
@@ -405,6 +387,43 @@ pub(crate) fn step(
             }
         }
     }
+}
+
+/// The lanes (x, y, z, start x, y, z, w) and the lane-order velocities of
+/// the lanes `band`, and its length, which every slice has (asserted once,
+/// so that each index in the loops is checked once).
+///
+/// # Safety
+/// No other slice of these lanes taken from the same arrays may be in use
+/// meanwhile.
+#[allow(clippy::type_complexity)]
+unsafe fn band_state<'a>(
+    lanes: [Disjoint<'a, f32>; 7],
+    velocity: [Disjoint<'a, f32>; 3],
+    band: std::ops::Range<usize>,
+) -> ([&'a mut [f32]; 7], [&'a mut [f32]; 3], usize) {
+    // SAFETY: by the caller's promise.
+    let (l, v) = unsafe {
+        (
+            lanes.map(|s| s.range(band.clone())),
+            velocity.map(|s| s.range(band.clone())),
+        )
+    };
+    let len = band.len();
+    let [a, b, c, d, e, f, g] = &l;
+    assert!(
+        [
+            a.len(),
+            b.len(),
+            c.len(),
+            d.len(),
+            e.len(),
+            f.len(),
+            g.len()
+        ] == [len; 7]
+    );
+    assert!([v[0].len(), v[1].len(), v[2].len()] == [len; 3]);
+    (l, v, len)
 }
 
 /// Particle `i`'s prediction over `h` seconds: external forces (gravity,
