@@ -96,19 +96,25 @@ impl LaneContacts {
             return false;
         }
         for o in obstacles {
-            let shape = if let Some(ball) = o.shape.as_ball() {
-                StillShape::Ball {
+            let shape = match (o.shape.as_ball(), o.shape.as_halfspace()) {
+                (Some(ball), _) => StillShape::Ball {
                     centre: o.pose.translation,
                     reach: ball.radius + thickness,
+                },
+                (None, Some(half)) => {
+                    let normal = (o.pose.rotation * half.normal).normalize();
+                    StillShape::Plane {
+                        normal,
+                        offset: normal.dot(o.pose.translation) + thickness,
+                    }
                 }
-            } else if let Some(half) = o.shape.as_halfspace() {
-                let normal = (o.pose.rotation * half.normal).normalize();
-                StillShape::Plane {
-                    normal,
-                    offset: normal.dot(o.pose.translation) + thickness,
+                // `holds` took only balls and half-spaces; should it take
+                // another shape one day, this one is not held.
+                (None, None) => {
+                    self.shapes.clear();
+                    self.friction.clear();
+                    return false;
                 }
-            } else {
-                unreachable!("`holds` took only balls and half-spaces")
             };
             self.shapes.push(shape);
             self.friction.push(o.friction);
