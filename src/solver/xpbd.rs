@@ -190,20 +190,12 @@ pub(crate) fn step(
                     // SAFETY: bands are disjoint ranges of lanes.
                     let ([lx, ly, lz, sx, sy, sz, lw], [vx, vy, vz], len) =
                         unsafe { band_state(lanes, [vx, vy, vz], band) };
-                    let mut fast2 = [0.0f32; 8];
-                    for k in 0..len {
-                        let mut p = Vector::new(lx[k], ly[k], lz[k]);
-                        let mut vk = Vector::new(vx[k], vy[k], vz[k]);
-                        (sx[k], sy[k], sz[k]) = (p.x, p.y, p.z);
-                        if lw[k] != 0.0 {
-                            vk += (g - vk * drag) * h;
-                        }
-                        p += vk * h;
-                        (lx[k], ly[k], lz[k]) = (p.x, p.y, p.z);
-                        (vx[k], vy[k], vz[k]) = (vk.x, vk.y, vk.z);
-                        fast2[k % 8] = fast2[k % 8].max(vk.length_squared());
-                    }
-                    let fast2 = fast2.into_iter().fold(0.0, f32::max);
+                    let fast2 = predict_lanes(
+                        [lx, ly, lz, sx, sy, sz, lw],
+                        [vx, vy, vz],
+                        len,
+                        (g, drag, h),
+                    );
                     fastest.fetch_max(fast2.to_bits(), Ordering::Relaxed);
                 });
             } else {
@@ -424,6 +416,39 @@ unsafe fn band_state<'a>(
     );
     assert!([v[0].len(), v[1].len(), v[2].len()] == [len; 3]);
     (l, v, len)
+}
+
+/// The prediction of `len` lanes (positions x, y, z, start x, y, z,
+/// inverse masses; velocities x, y, z) over `h` seconds under gravity `g`
+/// and air drag `drag`, as [`predict`] makes it, operation for operation
+/// per component (no wind): the start becomes where a lane is. Returns the
+/// largest squared speed (eight running maxima: one was a chain of
+/// dependent `max`es).
+#[inline(always)]
+fn predict_lanes(
+    [lx, ly, lz, sx, sy, sz, lw]: [&mut [f32]; 7],
+    [vx, vy, vz]: [&mut [f32]; 3],
+    len: usize,
+    (g, drag, h): (Vector, f32, f32),
+) -> f32 {
+    let arrays = [&*lx, &*ly, &*lz, &*sx, &*sy, &*sz, &*lw, &*vx, &*vy, &*vz];
+    assert!(arrays.iter().all(|a| a.len() == len));
+    let mut fast2 = [0.0f32; 8];
+    for k in 0..len {
+        let free = lw[k] != 0.0;
+        let (ux, uy, uz) = (vx[k], vy[k], vz[k]);
+        let ux = if free { ux + (g.x - ux * drag) * h } else { ux };
+        let uy = if free { uy + (g.y - uy * drag) * h } else { uy };
+        let uz = if free { uz + (g.z - uz * drag) * h } else { uz };
+        (sx[k], sy[k], sz[k]) = (lx[k], ly[k], lz[k]);
+        lx[k] += ux * h;
+        ly[k] += uy * h;
+        lz[k] += uz * h;
+        (vx[k], vy[k], vz[k]) = (ux, uy, uz);
+        let m = &mut fast2[k % 8];
+        *m = m.max(ux * ux + uy * uy + uz * uz);
+    }
+    fast2.into_iter().fold(0.0, f32::max)
 }
 
 /// Particle `i`'s prediction over `h` seconds: external forces (gravity,
