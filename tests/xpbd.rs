@@ -432,3 +432,48 @@ fn a_sheet_thrown_onto_a_small_still_ball_on_a_floor_stays_out_of_both() {
     // after 3 s with the collision stage every substep too).
     assert!(speed < 0.5, "moving at {speed} m/s after 3 s, thrown at 5");
 }
+
+/// A still ball and a floor far below a hanging curtain, which the lanes
+/// could hold, give it the bits of the same ball crawling at 1 mm/s,
+/// which they cannot, when stages after the integrator move its particles
+/// (tethers, self-collision): those read and write the particles' arrays
+/// every substep, so the lanes must not keep the state to themselves then.
+#[test]
+fn still_obstacles_held_in_the_lanes_leave_tethers_and_self_collision_their_work() {
+    let still = Obstacle::ball(Vector::new(0.0, -5.0, 0.0), 0.5);
+    let crawling = still
+        .clone()
+        .with_velocity(Vector::new(0.0, 0.0, 0.001), Vector::ZERO);
+    let floor = Obstacle::new(
+        parry3d::shape::SharedShape::halfspace(Vector::Y),
+        Pose::from_translation(Vector::new(0.0, -10.0, 0.0)),
+    );
+    for (tethers, self_collision) in [(true, false), (false, true)] {
+        let run = |ball: &Obstacle| {
+            let cloth = ClothBuilder::new(24, 24)
+                .size(0.6, 0.6)
+                .vertical(Vector::new(0.0, 1.0, 0.0))
+                .pins(PinPreset::CurtainRow)
+                .tethers(tethers)
+                .self_collision(self_collision)
+                .build()
+                .unwrap();
+            let mut sim = Simulation::new(cloth).with_integrator(Integrator::Xpbd);
+            // A push, so that the tethers and layers have work to do.
+            for i in 0..sim.cloth.particle_count() {
+                let s = i as f32;
+                let push = Vector::new(0.8 * (0.3 * s).sin(), -1.5, 0.6 * (0.7 * s).cos());
+                sim.cloth.set_velocity(i, push).unwrap();
+            }
+            let obstacles = [ball.clone(), floor.clone()];
+            for _ in 0..30 {
+                sim.step(1.0 / 60.0, &obstacles).unwrap();
+            }
+            sim.positions().to_vec()
+        };
+        assert!(
+            run(&still) == run(&crawling),
+            "tethers {tethers}, self-collision {self_collision}: the lanes changed it"
+        );
+    }
+}

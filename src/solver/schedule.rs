@@ -206,6 +206,8 @@ impl ClothSolver {
         };
         let times = &mut report.times;
         let mut watch = Lap::start();
+        // Stages after the integrator that move the particles.
+        let moved_after = cloth.params.self_collision || cloth.params.tethers;
         for substep in 0..k {
             let ctx = StepContext {
                 dt,
@@ -249,6 +251,7 @@ impl ClothSolver {
                 mass_revision: cloth.mass_revision,
                 grid: cloth.topology.grid,
                 team,
+                moved_after,
             };
             watch.lap(&mut times.contacts);
             let outcome = match integrate(&sub, (x, v, x_prev), &mut self.state, ws) {
@@ -307,10 +310,7 @@ impl ClothSolver {
             // The integrator held every contact inside the substep (and
             // nothing moved the particles since): the collision stage's
             // exact pass waits for the step's last substep.
-            let held = outcome.contacts_held
-                && substep + 1 < k
-                && !cloth.params.self_collision
-                && !cloth.params.tethers;
+            let held = outcome.contacts_held && substep + 1 < k && !moved_after;
             if held {
                 continue;
             }

@@ -24,4 +24,8 @@ pub(crate) struct Substep<'a> {
     pub grid: Option<Grid>,
     /// The threads the substep's loops may run on.
     pub team: Team<'a>,
+    /// A stage after the integrator moves the particles this substep
+    /// (self-collision, tethers): the integrator must hand its state back
+    /// in the particles' arrays every substep.
+    pub moved_after: bool,
 }

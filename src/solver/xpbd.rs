@@ -174,9 +174,10 @@ pub(crate) fn step(
             // (never across steps: the user may move particles between).
             let resident = std::mem::take(&mut ws.resident) && sub.ctx.substep > 0;
             // The state may stay in the lanes after this substep: no wind
-            // (its forces are found from the particles' own arrays) and a
+            // (its forces are found from the particles' own arrays), no
+            // stage after this one that moves the particles, and a
             // substep after it.
-            let may_stay = calm && sub.ctx.substep + 1 < sub.ctx.substeps;
+            let may_stay = calm && !sub.moved_after && sub.ctx.substep + 1 < sub.ctx.substeps;
             // The fastest particle after the prediction (its squared speed's
             // bits: non-negative floats order as their bits do).
             let fastest = AtomicU32::new(0);
