@@ -122,6 +122,25 @@ impl<'a> Team<'a> {
         self.sum_count(items.len(), |k| f(&items[k]))
     }
 
+    /// Runs `f` on `0..count` cut into chunks of `chunk` (on the team's
+    /// threads from two chunks on) and returns the largest of what it
+    /// returns, taken as non-negative: the same whatever the order.
+    pub(crate) fn largest_over_chunks(
+        self,
+        (count, chunk): (usize, usize),
+        f: impl Fn(Range<usize>) -> f32 + Sync,
+    ) -> f32 {
+        let largest = std::sync::atomic::AtomicU32::new(0);
+        let chunks = count.div_ceil(chunk);
+        self.for_work(count, 2 * chunk).sum_count(chunks, |c| {
+            let got = f(c * chunk..((c + 1) * chunk).min(count));
+            // Non-negative floats order as their bits do.
+            largest.fetch_max(got.max(0.0).to_bits(), std::sync::atomic::Ordering::Relaxed);
+            0
+        });
+        f32::from_bits(largest.into_inner())
+    }
+
     /// Runs `f` on `0..count` and sums what it returns: on the team's
     /// threads, in whatever order they take the items, or in order alone.
     pub(crate) fn sum_count(self, count: usize, f: impl Fn(usize) -> u32 + Sync) -> u32 {

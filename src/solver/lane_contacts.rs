@@ -25,7 +25,6 @@
 use crate::collision::Obstacle;
 use crate::math::{simd_available, Vector};
 use crate::parallel::{Disjoint, Team};
-use std::sync::atomic::{AtomicU32, Ordering};
 
 use super::grid_sweep::Lanes;
 
@@ -162,7 +161,7 @@ impl LaneContacts {
             friction: friction.then_some(&self.friction[..]),
         };
         let simd = simd_available();
-        for_chunks(lx.len(), team, |range| {
+        team.largest_over_chunks((lx.len(), CHUNK), |range| {
             // SAFETY: chunks are disjoint ranges of lanes; the start
             // positions and inverse masses are only read.
             let chunk = unsafe {
@@ -451,21 +450,6 @@ fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
             };
         }
     }
-}
-
-/// Runs `f` on every chunk of [`CHUNK`] lanes of `count` (on the `team`'s
-/// threads from two chunks on) and returns the largest of what it returns
-/// (non-negative): the same whatever the order.
-fn for_chunks(count: usize, team: Team, f: impl Fn(std::ops::Range<usize>) -> f32 + Sync) -> f32 {
-    let largest = AtomicU32::new(0);
-    let chunks = count.div_ceil(CHUNK);
-    team.for_work(count, 2 * CHUNK).sum_count(chunks, |c| {
-        let got = f(c * CHUNK..((c + 1) * CHUNK).min(count));
-        // Non-negative floats order as their bits do.
-        largest.fetch_max(got.max(0.0).to_bits(), Ordering::Relaxed);
-        0
-    });
-    f32::from_bits(largest.into_inner())
 }
 
 #[cfg(test)]

@@ -486,26 +486,6 @@ fn correct_velocity(v: &mut Vector, correction: Vector, inv_mass: f32, h: f32) {
 /// Planes per chunk of a pass over the contact planes, a chunk to a thread.
 const PLANE_CHUNK: usize = 1024;
 
-/// Runs `f` on every chunk of [`PLANE_CHUNK`] planes of `count` (on the
-/// `team`'s threads from two chunks on) and returns the largest of what it
-/// returns (non-negative): the same whatever the order.
-fn for_plane_chunks(
-    count: usize,
-    team: Team,
-    f: impl Fn(std::ops::Range<usize>) -> f32 + Sync,
-) -> f32 {
-    let largest = AtomicU32::new(0);
-    let chunks = count.div_ceil(PLANE_CHUNK);
-    team.for_work(count, 2 * PLANE_CHUNK)
-        .sum_count(chunks, |c| {
-            let got = f(c * PLANE_CHUNK..((c + 1) * PLANE_CHUNK).min(count));
-            // Non-negative floats order as their bits do.
-            largest.fetch_max(got.max(0.0).to_bits(), Ordering::Relaxed);
-            0
-        });
-    f32::from_bits(largest.into_inner())
-}
-
 /// Projects every particle with a contact plane onto its half-space, in
 /// the lanes (`lane` of each plane: each lane is at most one plane's); adds
 /// the push to the plane's depth. Returns the farthest it pushed one (m).
@@ -521,7 +501,7 @@ fn project_planes(planes: &mut ContactPlanes, lane: &[u32], lanes: &mut Lanes, t
     let [lx, ly, lz, ..] = lanes.disjoint();
     let n_lanes = lx.len();
     let depth = Disjoint::new(&mut depth[..]);
-    for_plane_chunks(count, team, |range| {
+    team.largest_over_chunks((count, PLANE_CHUNK), |range| {
         // SAFETY: chunks are disjoint ranges of planes.
         let depth = unsafe { depth.range(range.clone()) };
         let mut farthest = 0.0f32;
@@ -600,7 +580,7 @@ fn hold_planes(
     assert!(normal.len() == count && depth.len() == count && friction.len() == count);
     let [lx, ly, lz, sx, sy, sz, _] = lanes.disjoint();
     let n_lanes = lx.len();
-    let farthest = for_plane_chunks(count, team, |range| {
+    let farthest = team.largest_over_chunks((count, PLANE_CHUNK), |range| {
         let mut farthest = 0.0f32;
         for k in range {
             if depth[k] <= 0.0 {
