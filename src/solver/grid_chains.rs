@@ -28,6 +28,7 @@ use crate::cloth::{Cloth, SpringKind};
 use crate::math::simd_available;
 use crate::parallel::{Disjoint, Team};
 
+use super::chain_transpose::{transpose_in, transpose_out};
 use super::grid_sweep::{GridPlan, Lanes};
 use super::staggered::Staggered;
 
@@ -156,6 +157,7 @@ impl ChainScratch {
                 column,
                 shape,
                 team_t,
+                simd,
             );
         }
         // SAFETY: the multipliers' scratch is this thread's alone here.
@@ -182,7 +184,7 @@ impl ChainScratch {
             let lambda_rows = Disjoint::new(lambda_rows);
             let [x, y, z, lambda] = [TX, TY, TZ, TLAMBDA].map(|a| &*t[a].range(0..n));
             let pairs = [(x, lx), (y, ly), (z, lz), (lambda, lambda_rows)];
-            transpose_out(&pairs, column, shape, team_t);
+            transpose_out(&pairs, column, shape, team_t, simd);
         }
         // Columns: in place, down the rows of the lanes.
         // SAFETY: inverse masses are only read.
@@ -206,80 +208,6 @@ impl ChainScratch {
     pub fn replanned(&mut self) {
         self.constants_for = None;
     }
-}
-
-/// Side of the tiles the transposes copy: a tile's rows of lanes and of
-/// scratch stay in the first-level cache.
-const TILE: usize = 8;
-
-/// Checks, once a transpose, what its unchecked copies rely on: every
-/// array holds the whole grid, and each lane of a row has its column.
-fn assert_within(pairs: &[(&[f32], Disjoint<f32>)], column: &[u32], (cols, rows): (usize, usize)) {
-    let n = cols * rows;
-    assert!(pairs.iter().all(|(a, b)| a.len() >= n && b.len() >= n) && column.len() == cols);
-}
-
-/// Copies each pair's lanes (row-major, `shape` = (columns, rows), lanes
-/// of a row in the plan's order) into its scratch (column-major), a chunk
-/// of lanes along the rows a thread, in tiles of [`TILE`] rows.
-///
-/// # Safety
-/// The scratch arrays are used by no one else meanwhile, and the lane
-/// arrays not written; all `columns · rows` long.
-unsafe fn transpose_in(
-    pairs: &[(&[f32], Disjoint<f32>)],
-    column: &[u32],
-    (cols, rows): (usize, usize),
-    team: Team,
-) {
-    assert_within(pairs, column, (cols, rows));
-    team.sum_count(cols.div_ceil(CHUNK), |q| {
-        let lanes = q * CHUNK..((q + 1) * CHUNK).min(cols);
-        for r0 in (0..rows).step_by(TILE) {
-            let r1 = (r0 + TILE).min(rows);
-            for &(from, to) in pairs {
-                let (from, to) = (from.as_ptr(), to.as_ptr());
-                for p in lanes.clone() {
-                    let c = column[p] as usize;
-                    for r in r0..r1 {
-                        // SAFETY: within both arrays (asserted); lane
-                        // `p`'s scratch row is this chunk's alone.
-                        unsafe { *to.add(c * rows + r) = *from.add(r * cols + p) };
-                    }
-                }
-            }
-        }
-        0
-    });
-}
-
-/// The inverse of [`transpose_in`]: each pair's scratch back into its
-/// lanes, a chunk of rows a thread.
-///
-/// # Safety
-/// As for [`transpose_in`], the roles swapped.
-unsafe fn transpose_out(
-    pairs: &[(&[f32], Disjoint<f32>)],
-    column: &[u32],
-    (cols, rows): (usize, usize),
-    team: Team,
-) {
-    assert_within(pairs, column, (cols, rows));
-    team.sum_count(rows.div_ceil(CHUNK), |q| {
-        let rs = q * CHUNK..((q + 1) * CHUNK).min(rows);
-        for &(from, to) in pairs {
-            let (from, to) = (from.as_ptr(), to.as_ptr());
-            for (p, &c) in column.iter().enumerate() {
-                let c = c as usize;
-                for r in rs.clone() {
-                    // SAFETY: within both arrays (asserted); row `r`'s
-                    // lanes are this chunk's alone.
-                    unsafe { *to.add(r * cols + p) = *from.add(c * rows + r) };
-                }
-            }
-        }
-        0
-    });
 }
 
 /// Solves the `width` chains of `chains`, a chunk at a time.

@@ -3,6 +3,7 @@
 //! (`schedule.rs`: the stages of a step in one readable order) and the
 //! integrators, one file per method.
 
+mod chain_transpose;
 mod cloth_solver;
 mod explicit_euler;
 mod fast_mass_spring;

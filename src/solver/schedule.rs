@@ -220,9 +220,14 @@ impl ClothSolver {
             };
             // Obstacle motion: where the obstacles are at the end of the substep.
             ws.collision.advance(&ctx, obstacles);
-            // Where the substep starts, for tracing particles into moving obstacles.
+            // Where the substep starts, for tracing particles into moving
+            // obstacles; not while xpbd's lanes hold the state, when `x`
+            // is stale and xpbd writes it as it hands the state back (a
+            // copy of nothing, 2% of the drape's frame at N = 128).
             let p = &mut cloth.particles;
-            p.x_prev.copy_from_slice(&p.x);
+            if !(substep > 0 && ws.xpbd.holds_state()) {
+                p.x_prev.copy_from_slice(&p.x);
+            }
             // Contact detection, for the solvers that take contacts into their solve.
             if self.settings.integrator.solves_contacts() {
                 ws.collision

@@ -81,6 +81,16 @@ pub(crate) struct XpbdScratch {
     resident: bool,
 }
 
+impl XpbdScratch {
+    /// The lanes hold the cloth's state from the last substep of this
+    /// step (`resident`): the particles' arrays are stale until the
+    /// solver hands the state back, start of substep included, which it
+    /// writes into `x_prev` itself.
+    pub fn holds_state(&self) -> bool {
+        self.resident
+    }
+}
+
 /// What a substep of the small-steps solver hands back.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct XpbdOutcome {

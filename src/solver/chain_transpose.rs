@@ -1,0 +1,337 @@
+//! The copies of a grid's lanes into a transposed scratch and back, for the
+//! chain solves along rows (`grid_chains.rs`), where a row's chain must be
+//! a lane of the scratch. Pure data movement: blocks of 8 × 8 transposed in
+//! AVX2 registers where the CPU has it, element by element elsewhere and
+//! at the edges, the same values either way. Element by element, the
+//! copies were 7% of the drape's frame at N = 128 (perf, one thread).
+
+use crate::parallel::{Disjoint, Team};
+
+/// Lanes (rows, going back) a thread takes at a time: a multiple of [`BLOCK`].
+const CHUNK: usize = 32;
+
+/// Side of the blocks transposed in registers (AVX2's 8 `f32`).
+const BLOCK: usize = 8;
+
+/// Side of the tiles the element-by-element copies take: a tile's rows of
+/// lanes and of scratch stay in the first-level cache.
+const TILE: usize = 8;
+
+/// Checks, once a transpose, what its unchecked copies rely on: every
+/// array holds the whole grid, and each lane of a row has its column.
+fn assert_within(pairs: &[(&[f32], Disjoint<f32>)], column: &[u32], (cols, rows): (usize, usize)) {
+    let n = cols * rows;
+    assert!(pairs.iter().all(|(a, b)| a.len() >= n && b.len() >= n) && column.len() == cols);
+    assert!(column.iter().all(|&c| (c as usize) < cols));
+}
+
+/// Copies each pair's lanes (row-major, `shape` = (columns, rows), lanes
+/// of a row in the plan's order) into its scratch (column-major: lane `p`
+/// of row `r` to `column[p] · rows + r`), a chunk of lanes along the rows a
+/// thread; in registers when `simd` (only where the CPU has AVX2).
+///
+/// # Safety
+/// The scratch arrays are used by no one else meanwhile, and the lane
+/// arrays not written.
+pub(super) unsafe fn transpose_in(
+    pairs: &[(&[f32], Disjoint<f32>)],
+    column: &[u32],
+    shape: (usize, usize),
+    team: Team,
+    simd: bool,
+) {
+    assert_within(pairs, column, shape);
+    team.sum_count(shape.0.div_ceil(CHUNK), |q| {
+        let lanes = q * CHUNK..((q + 1) * CHUNK).min(shape.0);
+        for &(from, to) in pairs {
+            let copy = Copy {
+                from: from.as_ptr(),
+                to: to.as_ptr(),
+                column,
+                shape,
+            };
+            #[cfg(target_arch = "x86_64")]
+            if simd {
+                // SAFETY: `simd` only when the CPU has AVX2; within both
+                // arrays (asserted); lane `p`'s scratch row is this chunk's alone.
+                unsafe { in_chunk_avx2(&copy, lanes.clone()) };
+                continue;
+            }
+            let _ = simd;
+            // SAFETY: as above.
+            unsafe { in_chunk(&copy, lanes.clone(), false) };
+        }
+        0
+    });
+}
+
+/// The inverse of [`transpose_in`]: each pair's scratch back into its
+/// lanes, a chunk of rows a thread.
+///
+/// # Safety
+/// As for [`transpose_in`], the roles swapped.
+pub(super) unsafe fn transpose_out(
+    pairs: &[(&[f32], Disjoint<f32>)],
+    column: &[u32],
+    shape: (usize, usize),
+    team: Team,
+    simd: bool,
+) {
+    assert_within(pairs, column, shape);
+    team.sum_count(shape.1.div_ceil(CHUNK), |q| {
+        let rows = q * CHUNK..((q + 1) * CHUNK).min(shape.1);
+        for &(from, to) in pairs {
+            let copy = Copy {
+                from: from.as_ptr(),
+                to: to.as_ptr(),
+                column,
+                shape,
+            };
+            #[cfg(target_arch = "x86_64")]
+            if simd {
+                // SAFETY: `simd` only when the CPU has AVX2; within both
+                // arrays (asserted); row `r`'s lanes are this chunk's alone.
+                unsafe { out_chunk_avx2(&copy, rows.clone()) };
+                continue;
+            }
+            // SAFETY: as above.
+            unsafe { out_chunk(&copy, rows.clone(), false) };
+        }
+        0
+    });
+}
+
+/// One array's copy: from, to, the column of each lane of a row, and the
+/// grid's (columns, rows).
+struct Copy<'a> {
+    from: *const f32,
+    to: *mut f32,
+    column: &'a [u32],
+    shape: (usize, usize),
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn in_chunk_avx2(copy: &Copy, lanes: std::ops::Range<usize>) {
+    // SAFETY: the caller's promise.
+    unsafe { in_chunk(copy, lanes, true) };
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn out_chunk_avx2(copy: &Copy, rows: std::ops::Range<usize>) {
+    // SAFETY: the caller's promise.
+    unsafe { out_chunk(copy, rows, true) };
+}
+
+/// Lanes `lanes` of every row into the scratch: blocks of 8 rows and 8
+/// lanes in registers when `simd`, the rest element by element.
+///
+/// # Safety
+/// Every element read and written is within the arrays (the caller
+/// asserted the shape), and this chunk's alone; `simd` only within an
+/// AVX2 function.
+#[inline(always)]
+unsafe fn in_chunk(c: &Copy, lanes: std::ops::Range<usize>, simd: bool) {
+    let (cols, rows) = c.shape;
+    let col = |p: usize| c.column[p] as usize;
+    #[cfg_attr(not(target_arch = "x86_64"), allow(unused_mut))]
+    let mut r0 = 0;
+    #[cfg(target_arch = "x86_64")]
+    while simd && r0 + BLOCK <= rows {
+        let mut p0 = lanes.start;
+        while p0 + BLOCK <= lanes.end {
+            // SAFETY: rows `r0..r0 + 8` of lanes `p0..p0 + 8`, to the
+            // scratch rows of their columns at `r0..r0 + 8`: in bounds.
+            unsafe {
+                block(
+                    std::array::from_fn(|i| c.from.add((r0 + i) * cols + p0)),
+                    std::array::from_fn(|j| c.to.add(col(p0 + j) * rows + r0)),
+                )
+            };
+            p0 += BLOCK;
+        }
+        for p in p0..lanes.end {
+            for r in r0..r0 + BLOCK {
+                // SAFETY: in bounds, as above.
+                unsafe { *c.to.add(col(p) * rows + r) = *c.from.add(r * cols + p) };
+            }
+        }
+        r0 += BLOCK;
+    }
+    let _ = simd;
+    for t0 in (r0..rows).step_by(TILE) {
+        let t1 = (t0 + TILE).min(rows);
+        for p in lanes.clone() {
+            for r in t0..t1 {
+                // SAFETY: in bounds, as above.
+                unsafe { *c.to.add(col(p) * rows + r) = *c.from.add(r * cols + p) };
+            }
+        }
+    }
+}
+
+/// Rows `rows` of the scratch back into the lanes: blocks of 8 lanes and
+/// 8 rows in registers when `simd`, the rest element by element.
+///
+/// # Safety
+/// As for [`in_chunk`].
+#[inline(always)]
+unsafe fn out_chunk(c: &Copy, rows: std::ops::Range<usize>, simd: bool) {
+    let (cols, height) = c.shape;
+    let col = |p: usize| c.column[p] as usize;
+    #[cfg_attr(not(target_arch = "x86_64"), allow(unused_mut))]
+    let mut p0 = 0;
+    #[cfg(target_arch = "x86_64")]
+    while simd && p0 + BLOCK <= cols {
+        let mut r0 = rows.start;
+        while r0 + BLOCK <= rows.end {
+            // SAFETY: the scratch rows of lanes `p0..p0 + 8` at `r0..r0 +
+            // 8`, to rows `r0..r0 + 8` of those lanes: in bounds.
+            unsafe {
+                block(
+                    std::array::from_fn(|j| c.from.add(col(p0 + j) * height + r0)),
+                    std::array::from_fn(|i| c.to.add((r0 + i) * cols + p0)),
+                )
+            };
+            r0 += BLOCK;
+        }
+        for r in r0..rows.end {
+            for p in p0..p0 + BLOCK {
+                // SAFETY: in bounds, as above.
+                unsafe { *c.to.add(r * cols + p) = *c.from.add(col(p) * height + r) };
+            }
+        }
+        p0 += BLOCK;
+    }
+    let _ = simd;
+    for p in p0..cols {
+        for r in rows.clone() {
+            // SAFETY: in bounds, as above.
+            unsafe { *c.to.add(r * cols + p) = *c.from.add(col(p) * height + r) };
+        }
+    }
+}
+
+/// Transposes an 8 × 8 block: element `j` of the 8 floats at `from[i]`
+/// goes to element `i` of the 8 floats at `to[j]`. Unpacks, shuffles and
+/// lane swaps, 24 in all, in registers.
+///
+/// # Safety
+/// Each pointer has 8 floats to read or write; within an AVX2 function.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn block(from: [*const f32; 8], to: [*mut f32; 8]) {
+    use std::arch::x86_64::*;
+    // SAFETY: the caller's promise (unaligned loads and stores).
+    unsafe {
+        let r = [
+            _mm256_loadu_ps(from[0]),
+            _mm256_loadu_ps(from[1]),
+            _mm256_loadu_ps(from[2]),
+            _mm256_loadu_ps(from[3]),
+            _mm256_loadu_ps(from[4]),
+            _mm256_loadu_ps(from[5]),
+            _mm256_loadu_ps(from[6]),
+            _mm256_loadu_ps(from[7]),
+        ];
+        // Pairs of rows interleaved: t0 = r0₀ r1₀ r0₁ r1₁ | r0₄ r1₄ r0₅ r1₅, …
+        let t0 = _mm256_unpacklo_ps(r[0], r[1]);
+        let t1 = _mm256_unpackhi_ps(r[0], r[1]);
+        let t2 = _mm256_unpacklo_ps(r[2], r[3]);
+        let t3 = _mm256_unpackhi_ps(r[2], r[3]);
+        let t4 = _mm256_unpacklo_ps(r[4], r[5]);
+        let t5 = _mm256_unpackhi_ps(r[4], r[5]);
+        let t6 = _mm256_unpacklo_ps(r[6], r[7]);
+        let t7 = _mm256_unpackhi_ps(r[6], r[7]);
+        // Quads: s0 = r0₀ r1₀ r2₀ r3₀ | r0₄ r1₄ r2₄ r3₄, …
+        let s0 = _mm256_shuffle_ps::<0x44>(t0, t2);
+        let s1 = _mm256_shuffle_ps::<0xEE>(t0, t2);
+        let s2 = _mm256_shuffle_ps::<0x44>(t1, t3);
+        let s3 = _mm256_shuffle_ps::<0xEE>(t1, t3);
+        let s4 = _mm256_shuffle_ps::<0x44>(t4, t6);
+        let s5 = _mm256_shuffle_ps::<0xEE>(t4, t6);
+        let s6 = _mm256_shuffle_ps::<0x44>(t5, t7);
+        let s7 = _mm256_shuffle_ps::<0xEE>(t5, t7);
+        // Halves joined: column j of the block.
+        _mm256_storeu_ps(to[0], _mm256_permute2f128_ps::<0x20>(s0, s4));
+        _mm256_storeu_ps(to[1], _mm256_permute2f128_ps::<0x20>(s1, s5));
+        _mm256_storeu_ps(to[2], _mm256_permute2f128_ps::<0x20>(s2, s6));
+        _mm256_storeu_ps(to[3], _mm256_permute2f128_ps::<0x20>(s3, s7));
+        _mm256_storeu_ps(to[4], _mm256_permute2f128_ps::<0x31>(s0, s4));
+        _mm256_storeu_ps(to[5], _mm256_permute2f128_ps::<0x31>(s1, s5));
+        _mm256_storeu_ps(to[6], _mm256_permute2f128_ps::<0x31>(s2, s6));
+        _mm256_storeu_ps(to[7], _mm256_permute2f128_ps::<0x31>(s3, s7));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::simd_available;
+
+    /// A grid's arrays transposed in and out, with `simd` or not, on
+    /// `threads`: (the scratch, the lanes back).
+    fn round_trip(
+        (cols, rows): (usize, usize),
+        column: &[u32],
+        simd: bool,
+        threads: usize,
+    ) -> (Vec<f32>, Vec<f32>) {
+        let n = cols * rows;
+        let lanes: Vec<f32> = (0..n).map(|i| i as f32 * 0.5 - 7.0).collect();
+        let (mut scratch, mut back) = (vec![f32::NAN; n], vec![f32::NAN; n]);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            crate::parallel::with_team(threads > 1, |team| {
+                // SAFETY: the arrays are this test's alone.
+                unsafe {
+                    transpose_in(
+                        &[(&lanes[..], Disjoint::new(&mut scratch[..]))],
+                        column,
+                        (cols, rows),
+                        team,
+                        simd,
+                    );
+                    transpose_out(
+                        &[(&scratch[..], Disjoint::new(&mut back[..]))],
+                        column,
+                        (cols, rows),
+                        team,
+                        simd,
+                    );
+                }
+            })
+        });
+        assert_eq!(back, lanes, "the round trip gives the lanes back");
+        (scratch, back)
+    }
+
+    #[test]
+    fn the_blocks_in_registers_copy_what_the_elements_do() {
+        // Columns and rows that leave tails past the blocks and past the
+        // chunks, columns permuted as a plan's blocks store them.
+        for (cols, rows) in [(43, 70), (64, 16), (5, 9), (8, 8), (37, 41)] {
+            let blocks = 4;
+            let column: Vec<u32> = {
+                let mut c: Vec<u32> = (0..cols as u32).collect();
+                c.sort_by_key(|&c| (c % blocks, c / blocks));
+                c
+            };
+            let (scratch, _) = round_trip((cols, rows), &column, false, 1);
+            for (p, &c) in column.iter().enumerate() {
+                for r in 0..rows {
+                    let lane = (r * cols + p) as f32 * 0.5 - 7.0;
+                    assert_eq!(scratch[c as usize * rows + r], lane, "lane {p} row {r}");
+                }
+            }
+            for threads in [1, 2] {
+                let simd = round_trip((cols, rows), &column, simd_available(), threads);
+                assert_eq!(simd.0, scratch, "{cols} × {rows} on {threads} threads");
+            }
+        }
+    }
+}
