@@ -79,6 +79,10 @@ pub(crate) struct XpbdScratch {
     /// stale: between substeps whose contacts the lanes held, nothing
     /// else reads them.
     resident: bool,
+    /// With `resident`: the lanes already hold the next substep's
+    /// prediction, made in the same pass as this one's velocities, and its
+    /// fastest squared speed's bits (`None`: not predicted yet).
+    predicted_ahead: Option<u32>,
 }
 
 impl XpbdScratch {
@@ -183,6 +187,7 @@ pub(crate) fn step(
             // The state is in the lanes from the last substep of this step
             // (never across steps: the user may move particles between).
             let resident = std::mem::take(&mut ws.resident) && sub.ctx.substep > 0;
+            let ahead = std::mem::take(&mut ws.predicted_ahead).filter(|_| resident);
             // The state may stay in the lanes after this substep: no wind
             // (its forces are found from the particles' own arrays), no
             // stage after this one that moves the particles, and a
@@ -193,7 +198,11 @@ pub(crate) fn step(
             let fastest = AtomicU32::new(0);
             let lanes = l.disjoint();
             let [vx, vy, vz] = vel.each_mut().map(|c| Disjoint::new(&mut c[..]));
-            if resident {
+            if let Some(fast2) = ahead {
+                // Predicted at the end of the last substep (the multipliers
+                // zeroed then too).
+                fastest.store(fast2, Ordering::Relaxed);
+            } else if resident {
                 // Predict in the lanes, as `predict` does, operation for
                 // operation (no wind): the bits of the path below.
                 let (g, drag) = (model.gravity, model.air_drag);
@@ -306,18 +315,19 @@ pub(crate) fn step(
             let lanes = l.disjoint();
             let [vx, vy, vz] = vel.each_mut().map(|c| Disjoint::new(&mut c[..]));
             if stay {
-                plan.for_each_band(team, |band| {
+                // This substep's velocities and the next one's prediction
+                // (no wind, the same step's gravity, drag and `h`) in one
+                // pass, and the multipliers zeroed for it: the state stays
+                // in the lanes and nothing else reads it between the two.
+                let (g, drag) = (model.gravity, model.air_drag);
+                let fastest = AtomicU32::new(0);
+                plan.for_each_band_from_zero(team, |band, _| {
                     // SAFETY: bands are disjoint ranges of lanes.
-                    let ([lx, ly, lz, sx, sy, sz, lw], [vx, vy, vz], len) =
-                        unsafe { band_state(lanes, [vx, vy, vz], band) };
-                    for k in 0..len {
-                        let mut vk = Vector::new(vx[k], vy[k], vz[k]);
-                        let predicted = Vector::new(sx[k], sy[k], sz[k]) + vk * h;
-                        let swept = Vector::new(lx[k], ly[k], lz[k]);
-                        correct_velocity(&mut vk, swept - predicted, lw[k], h);
-                        (vx[k], vy[k], vz[k]) = (vk.x, vk.y, vk.z);
-                    }
+                    let (l, v, len) = unsafe { band_state(lanes, [vx, vy, vz], band) };
+                    let fast2 = correct_and_predict_lanes(l, v, len, (g, drag, h));
+                    fastest.fetch_max(fast2.to_bits(), Ordering::Relaxed);
                 });
+                ws.predicted_ahead = Some(fastest.into_inner());
             } else {
                 // Back into the particles' arrays: from the lanes' state
                 // (with the substep's start, which the schedule could not
@@ -455,6 +465,43 @@ fn predict_lanes(
         lx[k] += ux * h;
         ly[k] += uy * h;
         lz[k] += uz * h;
+        (vx[k], vy[k], vz[k]) = (ux, uy, uz);
+        let m = &mut fast2[k % 8];
+        *m = m.max(ux * ux + uy * uy + uz * uz);
+    }
+    fast2.into_iter().fold(0.0, f32::max)
+}
+
+/// The end of a substep of `h` seconds and the prediction of the next in
+/// one pass over `len` lanes (as [`predict_lanes`] takes them): each
+/// lane's velocity from its motion, as [`correct_velocity`] makes it from
+/// the prediction (the start plus `h` times the velocity), then the next
+/// prediction from where the lane is, as [`predict_lanes`] makes it,
+/// operation for operation. Returns the largest squared speed after it.
+#[inline(always)]
+fn correct_and_predict_lanes(
+    [lx, ly, lz, sx, sy, sz, lw]: [&mut [f32]; 7],
+    [vx, vy, vz]: [&mut [f32]; 3],
+    len: usize,
+    (g, drag, h): (Vector, f32, f32),
+) -> f32 {
+    let arrays = [&*lx, &*ly, &*lz, &*sx, &*sy, &*sz, &*lw, &*vx, &*vy, &*vz];
+    assert!(arrays.iter().all(|a| a.len() == len));
+    let mut fast2 = [0.0f32; 8];
+    for k in 0..len {
+        let mut vk = Vector::new(vx[k], vy[k], vz[k]);
+        let predicted = Vector::new(sx[k], sy[k], sz[k]) + vk * h;
+        let swept = Vector::new(lx[k], ly[k], lz[k]);
+        correct_velocity(&mut vk, swept - predicted, lw[k], h);
+        let free = lw[k] != 0.0;
+        let (ux, uy, uz) = (vk.x, vk.y, vk.z);
+        let ux = if free { ux + (g.x - ux * drag) * h } else { ux };
+        let uy = if free { uy + (g.y - uy * drag) * h } else { uy };
+        let uz = if free { uz + (g.z - uz * drag) * h } else { uz };
+        (sx[k], sy[k], sz[k]) = (swept.x, swept.y, swept.z);
+        lx[k] = swept.x + ux * h;
+        ly[k] = swept.y + uy * h;
+        lz[k] = swept.z + uz * h;
         (vx[k], vy[k], vz[k]) = (ux, uy, uz);
         let m = &mut fast2[k % 8];
         *m = m.max(ux * ux + uy * uy + uz * uz);
