@@ -16,6 +16,7 @@ mod implicit_euler;
 mod integrate;
 mod integrator;
 mod lane_contacts;
+mod lane_motion;
 mod ordering;
 mod preconditioner;
 mod report;

@@ -16,7 +16,8 @@
 //! slide, then the stretch limit runs (and at the step's last substep the
 //! contacts win once more); the collision stage waits for the step's last
 //! substep, and the state (positions, velocities) stays in the lanes from
-//! one substep to the next, with the bits of the round trip through the
+//! one substep to the next, one's end and the next one's prediction in one
+//! pass (`lane_motion.rs`), with the bits of the round trip through the
 //! particles' arrays.
 //!
 //! A substep of `h` seconds: predict `v += h (g − drag v + f_wind / m)`,
@@ -43,6 +44,7 @@ use super::general_sweep::{self, PackedParticles};
 use super::grid_chains::ChainScratch;
 use super::grid_sweep::{limit_stretch, sweep, Compliance, GridPlan, Lanes};
 use super::lane_contacts::LaneContacts;
+use super::lane_motion::{self, Motion};
 use super::strain_limit;
 use super::substep::Substep;
 
@@ -74,15 +76,12 @@ pub(crate) struct XpbdScratch {
     lane_contacts: LaneContacts,
     /// Velocities (m/s) in lane order, while the state stays in the lanes.
     velocity: [Vec<f32>; 3],
-    /// The lanes hold the cloth's state at the end of the last substep
-    /// (positions and `velocity`), and the particles' own arrays are
-    /// stale: between substeps whose contacts the lanes held, nothing
-    /// else reads them.
-    resident: bool,
-    /// With `resident`: the lanes already hold the next substep's
-    /// prediction, made in the same pass as this one's velocities, and its
-    /// fastest squared speed's bits (`None`: not predicted yet).
-    predicted_ahead: Option<u32>,
+    /// The lanes hold the cloth's state, the last substep's end already
+    /// carried into this one's prediction (positions, starts and
+    /// `velocity`), and the particles' own arrays are stale: between
+    /// substeps whose contacts the lanes held, nothing else reads them.
+    /// With the bits of the prediction's largest squared speed.
+    resident: Option<u32>,
 }
 
 impl XpbdScratch {
@@ -91,7 +90,7 @@ impl XpbdScratch {
     /// solver hands the state back, start of substep included, which it
     /// writes into `x_prev` itself.
     pub fn holds_state(&self) -> bool {
-        self.resident
+        self.resident.is_some()
     }
 }
 
@@ -186,8 +185,8 @@ pub(crate) fn step(
             }
             // The state is in the lanes from the last substep of this step
             // (never across steps: the user may move particles between).
-            let resident = std::mem::take(&mut ws.resident) && sub.ctx.substep > 0;
-            let ahead = std::mem::take(&mut ws.predicted_ahead).filter(|_| resident);
+            let ahead = std::mem::take(&mut ws.resident).filter(|_| sub.ctx.substep > 0);
+            let resident = ahead.is_some();
             // The state may stay in the lanes after this substep: no wind
             // (its forces are found from the particles' own arrays), no
             // stage after this one that moves the particles, and a
@@ -199,25 +198,9 @@ pub(crate) fn step(
             let lanes = l.disjoint();
             let [vx, vy, vz] = vel.each_mut().map(|c| Disjoint::new(&mut c[..]));
             if let Some(fast2) = ahead {
-                // Predicted at the end of the last substep (the multipliers
-                // zeroed then too).
+                // Predicted at the end of the last substep, the
+                // multipliers zeroed then.
                 fastest.store(fast2, Ordering::Relaxed);
-            } else if resident {
-                // Predict in the lanes, as `predict` does, operation for
-                // operation (no wind): the bits of the path below.
-                let (g, drag) = (model.gravity, model.air_drag);
-                plan.for_each_band_from_zero(team, |band, _| {
-                    // SAFETY: bands are disjoint ranges of lanes.
-                    let ([lx, ly, lz, sx, sy, sz, lw], [vx, vy, vz], len) =
-                        unsafe { band_state(lanes, [vx, vy, vz], band) };
-                    let fast2 = predict_lanes(
-                        [lx, ly, lz, sx, sy, sz, lw],
-                        [vx, vy, vz],
-                        len,
-                        (g, drag, h),
-                    );
-                    fastest.fetch_max(fast2.to_bits(), Ordering::Relaxed);
-                });
             } else {
                 // Predict, and copy into the lanes: positions now, at the
                 // substep's start, and inverse masses (and velocities, when
@@ -319,15 +302,19 @@ pub(crate) fn step(
                 // (no wind, the same step's gravity, drag and `h`) in one
                 // pass, and the multipliers zeroed for it: the state stays
                 // in the lanes and nothing else reads it between the two.
-                let (g, drag) = (model.gravity, model.air_drag);
+                let motion = Motion {
+                    gravity: model.gravity,
+                    drag: model.air_drag,
+                    h,
+                };
                 let fastest = AtomicU32::new(0);
                 plan.for_each_band_from_zero(team, |band, _| {
                     // SAFETY: bands are disjoint ranges of lanes.
-                    let (l, v, len) = unsafe { band_state(lanes, [vx, vy, vz], band) };
-                    let fast2 = correct_and_predict_lanes(l, v, len, (g, drag, h));
+                    let (l, v, _) = unsafe { band_state(lanes, [vx, vy, vz], band) };
+                    let fast2 = lane_motion::correct_and_predict((l, v), motion);
                     fastest.fetch_max(fast2.to_bits(), Ordering::Relaxed);
                 });
-                ws.predicted_ahead = Some(fastest.into_inner());
+                ws.resident = Some(fastest.into_inner());
             } else {
                 // Back into the particles' arrays: from the lanes' state
                 // (with the substep's start, which the schedule could not
@@ -367,7 +354,6 @@ pub(crate) fn step(
                     }
                 });
             }
-            ws.resident = stay;
             XpbdOutcome {
                 stretch_room: room,
                 contacts_held: held,
@@ -437,76 +423,6 @@ unsafe fn band_state<'a>(
     );
     assert!([v[0].len(), v[1].len(), v[2].len()] == [len; 3]);
     (l, v, len)
-}
-
-/// The prediction of `len` lanes (positions x, y, z, start x, y, z,
-/// inverse masses; velocities x, y, z) over `h` seconds under gravity `g`
-/// and air drag `drag`, as [`predict`] makes it, operation for operation
-/// per component (no wind): the start becomes where a lane is. Returns the
-/// largest squared speed (eight running maxima: one was a chain of
-/// dependent `max`es).
-#[inline(always)]
-fn predict_lanes(
-    [lx, ly, lz, sx, sy, sz, lw]: [&mut [f32]; 7],
-    [vx, vy, vz]: [&mut [f32]; 3],
-    len: usize,
-    (g, drag, h): (Vector, f32, f32),
-) -> f32 {
-    let arrays = [&*lx, &*ly, &*lz, &*sx, &*sy, &*sz, &*lw, &*vx, &*vy, &*vz];
-    assert!(arrays.iter().all(|a| a.len() == len));
-    let mut fast2 = [0.0f32; 8];
-    for k in 0..len {
-        let free = lw[k] != 0.0;
-        let (ux, uy, uz) = (vx[k], vy[k], vz[k]);
-        let ux = if free { ux + (g.x - ux * drag) * h } else { ux };
-        let uy = if free { uy + (g.y - uy * drag) * h } else { uy };
-        let uz = if free { uz + (g.z - uz * drag) * h } else { uz };
-        (sx[k], sy[k], sz[k]) = (lx[k], ly[k], lz[k]);
-        lx[k] += ux * h;
-        ly[k] += uy * h;
-        lz[k] += uz * h;
-        (vx[k], vy[k], vz[k]) = (ux, uy, uz);
-        let m = &mut fast2[k % 8];
-        *m = m.max(ux * ux + uy * uy + uz * uz);
-    }
-    fast2.into_iter().fold(0.0, f32::max)
-}
-
-/// The end of a substep of `h` seconds and the prediction of the next in
-/// one pass over `len` lanes (as [`predict_lanes`] takes them): each
-/// lane's velocity from its motion, as [`correct_velocity`] makes it from
-/// the prediction (the start plus `h` times the velocity), then the next
-/// prediction from where the lane is, as [`predict_lanes`] makes it,
-/// operation for operation. Returns the largest squared speed after it.
-#[inline(always)]
-fn correct_and_predict_lanes(
-    [lx, ly, lz, sx, sy, sz, lw]: [&mut [f32]; 7],
-    [vx, vy, vz]: [&mut [f32]; 3],
-    len: usize,
-    (g, drag, h): (Vector, f32, f32),
-) -> f32 {
-    let arrays = [&*lx, &*ly, &*lz, &*sx, &*sy, &*sz, &*lw, &*vx, &*vy, &*vz];
-    assert!(arrays.iter().all(|a| a.len() == len));
-    let mut fast2 = [0.0f32; 8];
-    for k in 0..len {
-        let mut vk = Vector::new(vx[k], vy[k], vz[k]);
-        let predicted = Vector::new(sx[k], sy[k], sz[k]) + vk * h;
-        let swept = Vector::new(lx[k], ly[k], lz[k]);
-        correct_velocity(&mut vk, swept - predicted, lw[k], h);
-        let free = lw[k] != 0.0;
-        let (ux, uy, uz) = (vk.x, vk.y, vk.z);
-        let ux = if free { ux + (g.x - ux * drag) * h } else { ux };
-        let uy = if free { uy + (g.y - uy * drag) * h } else { uy };
-        let uz = if free { uz + (g.z - uz * drag) * h } else { uz };
-        (sx[k], sy[k], sz[k]) = (swept.x, swept.y, swept.z);
-        lx[k] = swept.x + ux * h;
-        ly[k] = swept.y + uy * h;
-        lz[k] = swept.z + uz * h;
-        (vx[k], vy[k], vz[k]) = (ux, uy, uz);
-        let m = &mut fast2[k % 8];
-        *m = m.max(ux * ux + uy * uy + uz * uz);
-    }
-    fast2.into_iter().fold(0.0, f32::max)
 }
 
 /// Particle `i`'s prediction over `h` seconds: external forces (gravity,

@@ -1,0 +1,144 @@
+//! The particles' motion in the small-steps solver's lanes while its state
+//! stays there between substeps (`xpbd.rs`): the end of one substep (each
+//! lane's velocity from its motion) and the prediction of the next (gravity
+//! and air drag, no wind), in one pass. Each lane takes the operations
+//! `xpbd::predict` and `xpbd::correct_velocity` make on a particle, in the
+//! same order, so the bits are those of the particles' own arrays.
+//!
+//! Eight lanes at a time on copies in registers, written back whole, in
+//! AVX2 where the CPU has it: as one loop over lanes the pass stayed scalar
+//! (a tenth of the drape's frame at N = 128, perf, one thread).
+
+use crate::math::{simd_available, Vector};
+
+/// Lanes of one vector step (AVX2's eight `f32`).
+const W: usize = 8;
+
+/// What moves the lanes over a substep: gravity (m/s²), air drag (1/s)
+/// and the substep's length `h` (s).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Motion {
+    pub gravity: Vector,
+    pub drag: f32,
+    pub h: f32,
+}
+
+/// One band's lanes: positions x, y, z, positions at the substep's start
+/// x, y, z, inverse masses (the lanes' order, `grid_sweep::Lanes`), and
+/// velocities x, y, z; all of one length.
+pub(super) type BandState<'a> = ([&'a mut [f32]; 7], [&'a mut [f32]; 3]);
+
+/// Ends a substep and predicts the next on the lanes of `band`: each free
+/// lane's velocity gains its correction (where it is less where it was
+/// predicted to be, the start plus `h` times its velocity, over `h`); the
+/// start becomes where the lane is; the velocity gains gravity less drag
+/// over `h` and the lane moves by it (a pinned lane keeps its velocity and
+/// moves by it). Returns the largest squared speed (m²/s²) after it.
+pub(super) fn correct_and_predict(band: BandState, motion: Motion) -> f32 {
+    #[cfg(target_arch = "x86_64")]
+    if simd_available() {
+        // SAFETY: only where the CPU has AVX2.
+        return unsafe { correct_and_predict_avx2(band, motion) };
+    }
+    correct_and_predict_eights(band, motion)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn correct_and_predict_avx2(band: BandState, motion: Motion) -> f32 {
+    correct_and_predict_eights(band, motion)
+}
+
+/// [`correct_and_predict`], eight lanes at a time; the last, short step on
+/// copies padded with pinned lanes at rest.
+#[inline(always)]
+fn correct_and_predict_eights(mut band: BandState, m: Motion) -> f32 {
+    let n = band.0[0].len();
+    let arrays = band.0.iter().chain(&band.1);
+    assert!(
+        arrays.map(|a| a.len()).all(|len| len == n),
+        "a band's arrays of one length"
+    );
+    let mut fast2 = [0.0f32; W];
+    let mut k = 0;
+    while k + W <= n {
+        // A constant length: the copies are vector loads and stores.
+        step(&mut band, k, W, m, &mut fast2);
+        k += W;
+    }
+    if k < n {
+        step(&mut band, k, n - k, m, &mut fast2);
+    }
+    fast2.into_iter().fold(0.0, f32::max)
+}
+
+/// Lanes `k..k + len` (`len` at most [`W`]) of the band, on copies.
+#[inline(always)]
+fn step(
+    ([lx, ly, lz, sx, sy, sz, lw], [vx, vy, vz]): &mut BandState,
+    k: usize,
+    len: usize,
+    m: Motion,
+    fast2: &mut [f32; W],
+) {
+    let mut e = Eight::default();
+    let lanes = k..k + len;
+    for (to, from) in e.x.iter_mut().zip([&*lx, &*ly, &*lz]) {
+        to[..len].copy_from_slice(&from[lanes.clone()]);
+    }
+    for (to, from) in e.start.iter_mut().zip([&*sx, &*sy, &*sz]) {
+        to[..len].copy_from_slice(&from[lanes.clone()]);
+    }
+    for (to, from) in e.v.iter_mut().zip([&*vx, &*vy, &*vz]) {
+        to[..len].copy_from_slice(&from[lanes.clone()]);
+    }
+    e.w[..len].copy_from_slice(&lw[lanes.clone()]);
+    eight(&mut e, m, fast2);
+    for (from, to) in e.x.iter().zip([&mut **lx, &mut **ly, &mut **lz]) {
+        to[lanes.clone()].copy_from_slice(&from[..len]);
+    }
+    for (from, to) in e.start.iter().zip([&mut **sx, &mut **sy, &mut **sz]) {
+        to[lanes.clone()].copy_from_slice(&from[..len]);
+    }
+    for (from, to) in e.v.iter().zip([&mut **vx, &mut **vy, &mut **vz]) {
+        to[lanes.clone()].copy_from_slice(&from[..len]);
+    }
+}
+
+/// Eight lanes in registers: positions, starts (m), velocities (m/s) and
+/// inverse masses (1/kg); zeros (a pinned lane at rest) by default.
+#[derive(Default, Clone, Copy)]
+struct Eight {
+    x: [[f32; W]; 3],
+    start: [[f32; W]; 3],
+    v: [[f32; W]; 3],
+    w: [f32; W],
+}
+
+/// [`correct_and_predict`] on eight lanes, without branches; keeps in
+/// `fast2` the largest squared speed of each.
+#[inline(always)]
+fn eight(e: &mut Eight, m: Motion, fast2: &mut [f32; W]) {
+    let (g, h) = (m.gravity.to_array(), m.h);
+    for k in 0..W {
+        let free = e.w[k] != 0.0;
+        let mut speed2 = 0.0;
+        for a in 0..3 {
+            // The end of the substep (`correct_velocity`).
+            let predicted = e.start[a][k] + e.v[a][k] * h;
+            let swept = e.x[a][k];
+            let v = if free {
+                e.v[a][k] + (swept - predicted) / h
+            } else {
+                e.v[a][k]
+            };
+            // The next one's prediction (`predict`).
+            let v = if free { v + (g[a] - v * m.drag) * h } else { v };
+            e.start[a][k] = swept;
+            e.x[a][k] = swept + v * h;
+            e.v[a][k] = v;
+            speed2 += v * v;
+        }
+        fast2[k] = fast2[k].max(speed2);
+    }
+}
