@@ -450,7 +450,7 @@ fn predict(
 /// The velocity at the end of a substep of `h` seconds: the predicted one
 /// plus what the sweeps moved the particle, over `h` (pinned particles keep theirs).
 #[inline(always)]
-fn correct_velocity(v: &mut Vector, correction: Vector, inv_mass: f32, h: f32) {
+pub(super) fn correct_velocity(v: &mut Vector, correction: Vector, inv_mass: f32, h: f32) {
     if inv_mass != 0.0 {
         *v += correction / h;
     }
