@@ -43,6 +43,9 @@ pub struct RunMetrics {
     pub max_penetration_any_frame: f32,
     /// Largest stretch-spring strain on the final frame.
     pub max_stretch: f32,
+    /// Largest stretch-spring strain over all frames (a landing's peak).
+    #[serde(default)]
+    pub max_stretch_any_frame: f32,
     /// Where the cloth passes through itself on the final frame: pairs of a
     /// particle and a triangle not its neighbours closer than half the
     /// thickness, and triangle edges crossing triangles
@@ -112,6 +115,7 @@ pub fn run_with(
     let mut max_substeps = 0u32;
     let mut iterations = 0u64;
     let mut deepest_any = 0.0f32;
+    let mut stretch_any = 0.0f32;
     let mut crossings_any = 0;
     let mut torn = 0u64;
     let (mut asleep, mut asleep_frames) = (false, 0);
@@ -127,6 +131,7 @@ pub fn run_with(
         asleep_frames += u32::from(report.asleep);
         let deepest = scene.max_penetration();
         deepest_any = deepest_any.max(deepest);
+        stretch_any = stretch_any.max(max_stretch(&scene.cloth));
         crossings_any = crossings_any.max(self_intersections(&scene.cloth));
         on_frame(scene, f, deepest);
     }
@@ -164,6 +169,7 @@ pub fn run_with(
         max_penetration: scene.max_penetration(),
         max_penetration_any_frame: deepest_any,
         max_stretch: max_stretch(cloth),
+        max_stretch_any_frame: stretch_any,
         self_intersections: self_intersections(cloth),
         self_intersections_any_frame: crossings_any,
         torn_springs: torn,

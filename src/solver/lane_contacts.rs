@@ -61,6 +61,16 @@ pub(crate) struct LaneContacts {
 }
 
 impl LaneContacts {
+    /// Whether every obstacle is one the lanes may hold, whatever the
+    /// motion (none counts: nothing to hold): still (no rapier body, no
+    /// velocity), a ball or a half-space.
+    pub fn may_hold(obstacles: &[Obstacle]) -> bool {
+        obstacles.iter().all(|o| {
+            let shape = &o.shape;
+            o.is_still() && (shape.as_ball().is_some() || shape.as_halfspace().is_some())
+        })
+    }
+
     /// Whether the lanes hold the contacts of every one of `obstacles`
     /// (and there is one) for a substep in which no particle moves
     /// further than `motion` (m): each is still (no rapier body, no

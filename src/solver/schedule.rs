@@ -26,8 +26,9 @@
 
 use super::cloth_solver::{substeps_with, unshortened, ClothSolver};
 use super::integrate::integrate;
+use super::lane_contacts::LaneContacts;
 use super::report::{StepReport, MAX_DISTANCE, MAX_SPEED, MAX_STRAIN};
-use super::stability::{chains_lengthen, edge_substeps, stable_substeps};
+use super::stability::{chains_lengthen, edge_substeps, stable_substeps, unpinned_substeps};
 use super::stage_times::Lap;
 use super::strain_limit::limit_stretch;
 use super::substep::Substep;
@@ -167,7 +168,9 @@ impl ClothSolver {
     /// and seventeenth sessions): a 48 × 48 cotton tablecloth dropped on a
     /// table peaked at 12.3% stretch with the chains' 9 substeps and no
     /// planes, 4.58% at 32 with them (4.53% at the sweeps' 41); the drape
-    /// over a ball stays under 5% at 12.
+    /// over a ball stays under 5% at 12. A cloth without pins whose every
+    /// obstacle is a still ball or half-space takes at least 12 a frame at
+    /// 60 Hz rather than 16 (`stability.rs` says why).
     pub fn substeps_among(&self, cloth: &Cloth, obstacles: &[Obstacle], dt: f32) -> u32 {
         let lengthened =
             self.settings.substeps == Substeps::Auto && chains_lengthen(cloth, &self.settings);
@@ -175,6 +178,9 @@ impl ClothSolver {
             return self.substeps_for(cloth, dt);
         }
         match edges_within_reach(cloth, obstacles, dt) {
+            EdgesNear::None if unpinned_among_round(cloth, obstacles) => {
+                unpinned_substeps(cloth, &self.settings, dt)
+            }
             EdgesNear::None => self.substeps_for(cloth, dt),
             EdgesNear::Still => {
                 let sweeps = substeps_with(&unshortened(&self.settings), cloth, dt);
@@ -394,6 +400,15 @@ fn max_rest_length(cloth: &Cloth) -> f32 {
         .flat_map(|&k| springs.range(k))
         .map(|s| springs.rest[s])
         .fold(0.0, f32::max)
+}
+
+/// Whether `cloth` has no pin, no self-collision, and every obstacle is a
+/// still ball or half-space: the lanes may hold their contacts
+/// ([`LaneContacts::may_hold`]).
+fn unpinned_among_round(cloth: &Cloth, obstacles: &[Obstacle]) -> bool {
+    !cloth.params.self_collision
+        && LaneContacts::may_hold(obstacles)
+        && !cloth.particles.inv_mass.contains(&0.0)
 }
 
 /// Which obstacles with edges or corners may meet the cloth within a step.

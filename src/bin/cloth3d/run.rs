@@ -150,6 +150,12 @@ fn print_table(m: &RunMetrics) {
     );
     outln!(
         out,
+        "max_stretch_any_frame      {:.4} ({:.2}%)",
+        m.max_stretch_any_frame,
+        100.0 * m.max_stretch_any_frame
+    );
+    outln!(
+        out,
         "self_intersections         {} (worst frame {})",
         m.self_intersections,
         m.self_intersections_any_frame
