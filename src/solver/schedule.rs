@@ -395,11 +395,16 @@ pub(super) fn candidate_margin(cloth: &Cloth, dt: f32) -> f32 {
 /// The longest rest length among the springs sampled by edge collisions.
 fn max_rest_length(cloth: &Cloth) -> f32 {
     let springs = cloth.springs();
-    [SpringKind::Stretch, SpringKind::Shear]
-        .iter()
-        .flat_map(|&k| springs.range(k))
-        .map(|s| springs.rest[s])
-        .fold(0.0, f32::max)
+    let rest = springs.rest_lengths();
+    // Eight running maxima: the same largest value, without a chain of
+    // dependent `max`es (once a step, over every stretch and shear spring).
+    let mut most = [0.0f32; 8];
+    for kind in [SpringKind::Stretch, SpringKind::Shear] {
+        for (k, &r) in rest[springs.range(kind)].iter().enumerate() {
+            most[k % 8] = most[k % 8].max(r);
+        }
+    }
+    most.into_iter().fold(0.0, f32::max)
 }
 
 /// Whether `cloth` has no pin, no self-collision, and every obstacle is a
