@@ -130,10 +130,26 @@ impl ObstacleTracks {
         self.cached.clear();
         self.cache_start.push(0);
         let reach = Vector::splat(margin);
-        for &p in x {
-            self.gather_box(Aabb::new(p - reach, p + reach));
-            self.cached.extend_from_slice(&self.candidates);
-            self.cache_start.push(self.cached.len() as u32);
+        if self.bvh.is_none() {
+            // Few obstacles: their bounds tested in place, the same
+            // candidates in the same order as `gather_box` (which went
+            // through its scratch list, twice the time: 3% of the drape's
+            // step at N = 64).
+            for &p in x {
+                let region = Aabb::new(p - reach, p + reach);
+                for (o, bounds) in self.aabbs.iter().enumerate() {
+                    if bounds.intersects(&region) {
+                        self.cached.push(o as u32);
+                    }
+                }
+                self.cache_start.push(self.cached.len() as u32);
+            }
+        } else {
+            for &p in x {
+                self.gather_box(Aabb::new(p - reach, p + reach));
+                self.cached.extend_from_slice(&self.candidates);
+                self.cache_start.push(self.cached.len() as u32);
+            }
         }
         self.listed.clear();
         self.listed
