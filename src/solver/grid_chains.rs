@@ -244,13 +244,18 @@ unsafe fn solve_chunk_avx2(chains: &Chains, j: std::ops::Range<usize>) {
     unsafe { solve_chunk(chains, j) };
 }
 
-/// Chains `j`: vectors of [`LANES`] chains, then one at a time.
+/// Chains `j`: groups of [`GROUP`] chains, then vectors of [`LANES`], then one at a time.
 ///
 /// # Safety
 /// Chains `j` lie within the arrays, and no other thread touches them meanwhile.
 #[inline(always)]
 unsafe fn solve_chunk(chains: &Chains, j: std::ops::Range<usize>) {
     let mut at = j.start;
+    while at + GROUP <= j.end {
+        // SAFETY: the caller's promise.
+        unsafe { solve_group::<GROUP>(chains, at) };
+        at += GROUP;
+    }
     while at + LANES <= j.end {
         // SAFETY: the caller's promise.
         unsafe { solve_group::<LANES>(chains, at) };
@@ -265,6 +270,11 @@ unsafe fn solve_chunk(chains: &Chains, j: std::ops::Range<usize>) {
 
 /// Chains a vector holds (AVX2's 8 `f32`).
 const LANES: usize = 8;
+
+/// Chains solved side by side where a chunk has them: a chain's forward
+/// pass is a chain of dependent operations (a division per spring), so
+/// that several vectors of chains in flight at once hide its latency.
+const GROUP: usize = 16;
 
 /// Loads `M` floats at `p + at`.
 ///
