@@ -362,6 +362,17 @@ impl Drop for Leave<'_> {
     }
 }
 
+/// Runs `body` with a team of `threads` on a pool of its own (the tests
+/// that compare the bits of one thread and of several).
+#[cfg(test)]
+pub(crate) fn on_threads<R: Send>(threads: usize, body: impl FnOnce(Team) -> R + Send) -> R {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool");
+    pool.install(|| with_team(threads > 1, body))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

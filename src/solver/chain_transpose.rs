@@ -40,29 +40,8 @@ pub(super) unsafe fn transpose_in(
     team: Team,
     simd: bool,
 ) {
-    assert_within(pairs, column, shape);
-    team.sum_count(shape.0.div_ceil(CHUNK), |q| {
-        let lanes = q * CHUNK..((q + 1) * CHUNK).min(shape.0);
-        for &(from, to) in pairs {
-            let copy = Copy {
-                from: from.as_ptr(),
-                to: to.as_ptr(),
-                column,
-                shape,
-            };
-            #[cfg(target_arch = "x86_64")]
-            if simd {
-                // SAFETY: `simd` only when the CPU has AVX2; within both
-                // arrays (asserted); lane `p`'s scratch row is this chunk's alone.
-                unsafe { in_chunk_avx2(&copy, lanes.clone()) };
-                continue;
-            }
-            let _ = simd;
-            // SAFETY: as above.
-            unsafe { in_chunk(&copy, lanes.clone(), false) };
-        }
-        0
-    });
+    // SAFETY: the caller's promise.
+    unsafe { transpose(pairs, column, shape, (team, simd), Way::In) }
 }
 
 /// The inverse of [`transpose_in`]: each pair's scratch back into its
@@ -77,9 +56,36 @@ pub(super) unsafe fn transpose_out(
     team: Team,
     simd: bool,
 ) {
+    // SAFETY: the caller's promise.
+    unsafe { transpose(pairs, column, shape, (team, simd), Way::Out) }
+}
+
+/// Which way a transpose copies: lanes into the scratch, or back.
+#[derive(Clone, Copy)]
+enum Way {
+    In,
+    Out,
+}
+
+/// [`transpose_in`] or [`transpose_out`]: chunks of lanes along the rows
+/// going in, of rows coming back (each chunk writes only its own part).
+///
+/// # Safety
+/// As for [`transpose_in`] (for the way in) and [`transpose_out`].
+unsafe fn transpose(
+    pairs: &[(&[f32], Disjoint<f32>)],
+    column: &[u32],
+    shape: (usize, usize),
+    (team, simd): (Team, bool),
+    way: Way,
+) {
     assert_within(pairs, column, shape);
-    team.sum_count(shape.1.div_ceil(CHUNK), |q| {
-        let rows = q * CHUNK..((q + 1) * CHUNK).min(shape.1);
+    let along = match way {
+        Way::In => shape.0,
+        Way::Out => shape.1,
+    };
+    team.sum_count(along.div_ceil(CHUNK), |q| {
+        let part = q * CHUNK..((q + 1) * CHUNK).min(along);
         for &(from, to) in pairs {
             let copy = Copy {
                 from: from.as_ptr(),
@@ -87,18 +93,38 @@ pub(super) unsafe fn transpose_out(
                 column,
                 shape,
             };
-            #[cfg(target_arch = "x86_64")]
-            if simd {
-                // SAFETY: `simd` only when the CPU has AVX2; within both
-                // arrays (asserted); row `r`'s lanes are this chunk's alone.
-                unsafe { out_chunk_avx2(&copy, rows.clone()) };
-                continue;
-            }
-            // SAFETY: as above.
-            unsafe { out_chunk(&copy, rows.clone(), false) };
+            // SAFETY: within both arrays (asserted); going in, lane `p`'s
+            // scratch row is this chunk's alone; coming back, row `r`'s lanes.
+            unsafe { copy_chunk(&copy, part.clone(), way, simd) };
         }
         0
     });
+}
+
+/// One chunk of one array's transpose, in AVX2 registers when `simd`.
+///
+/// # Safety
+/// As for [`in_chunk`]; `simd` only where the CPU has AVX2.
+unsafe fn copy_chunk(copy: &Copy, part: std::ops::Range<usize>, way: Way, simd: bool) {
+    #[cfg(target_arch = "x86_64")]
+    if simd {
+        // SAFETY: the caller's promise.
+        unsafe {
+            match way {
+                Way::In => in_chunk_avx2(copy, part),
+                Way::Out => out_chunk_avx2(copy, part),
+            }
+        };
+        return;
+    }
+    let _ = simd;
+    // SAFETY: the caller's promise.
+    unsafe {
+        match way {
+            Way::In => in_chunk(copy, part, false),
+            Way::Out => out_chunk(copy, part, false),
+        }
+    }
 }
 
 /// One array's copy: from, to, the column of each lane of a row, and the
@@ -281,30 +307,24 @@ mod tests {
         let n = cols * rows;
         let lanes: Vec<f32> = (0..n).map(|i| i as f32 * 0.5 - 7.0).collect();
         let (mut scratch, mut back) = (vec![f32::NAN; n], vec![f32::NAN; n]);
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
-            crate::parallel::with_team(threads > 1, |team| {
-                // SAFETY: the arrays are this test's alone.
-                unsafe {
-                    transpose_in(
-                        &[(&lanes[..], Disjoint::new(&mut scratch[..]))],
-                        column,
-                        (cols, rows),
-                        team,
-                        simd,
-                    );
-                    transpose_out(
-                        &[(&scratch[..], Disjoint::new(&mut back[..]))],
-                        column,
-                        (cols, rows),
-                        team,
-                        simd,
-                    );
-                }
-            })
+        crate::parallel::on_threads(threads, |team| {
+            // SAFETY: the arrays are this test's alone.
+            unsafe {
+                transpose_in(
+                    &[(&lanes[..], Disjoint::new(&mut scratch[..]))],
+                    column,
+                    (cols, rows),
+                    team,
+                    simd,
+                );
+                transpose_out(
+                    &[(&scratch[..], Disjoint::new(&mut back[..]))],
+                    column,
+                    (cols, rows),
+                    team,
+                    simd,
+                );
+            }
         });
         assert_eq!(back, lanes, "the round trip gives the lanes back");
         (scratch, back)

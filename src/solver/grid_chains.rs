@@ -519,15 +519,9 @@ mod tests {
         let w = |i: usize| if i.is_multiple_of(23) { 0.0 } else { 50.0 };
         let run = |simd: bool, threads: usize| {
             let (_, mut plan, mut lanes) = setup((21, 70), jitter, w);
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
-                crate::parallel::with_team(threads > 1, |team| {
-                    let mut scratch = ChainScratch::default();
-                    scratch.solve_with(&mut plan, &mut lanes, (1.0e-3, 1), team, simd);
-                })
+            crate::parallel::on_threads(threads, |team| {
+                let mut scratch = ChainScratch::default();
+                scratch.solve_with(&mut plan, &mut lanes, (1.0e-3, 1), team, simd);
             });
             let (_, [rows, cols]) = plan.stretch_passes();
             let lambda: Vec<u32> = rows.iter().chain(&*cols).map(|v| v.to_bits()).collect();
