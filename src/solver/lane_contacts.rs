@@ -79,13 +79,11 @@ impl LaneContacts {
     /// run after a substep but the last.
     pub fn holds(obstacles: &[Obstacle], motion: f32) -> bool {
         !obstacles.is_empty()
+            && Self::may_hold(obstacles)
             && obstacles.iter().all(|o| {
-                let shape = &o.shape;
-                let fits = match shape.as_ball() {
-                    Some(ball) => ball.radius > BALL_MOTIONS * motion,
-                    None => shape.as_halfspace().is_some(),
-                };
-                o.is_still() && fits
+                o.shape
+                    .as_ball()
+                    .is_none_or(|ball| ball.radius > BALL_MOTIONS * motion)
             })
     }
 
