@@ -86,6 +86,17 @@ const XPBD_REACH: f32 = 1.25;
 /// 5.95%), 4.90% with 24 at N = 128 (20 gave 5.28%).
 const XPBD_CHAIN_REACH: f32 = 5.7;
 
+/// [`XPBD_CHAIN_REACH`] for a material with a stretch limit, which the
+/// lanes hold with more calls of its passes while a spring is still far
+/// over it (`xpbd::hold_limit`): two thirds of the substeps. Peak stretch
+/// over every frame of the drape (BENCHMARKS.md, twentieth session): at
+/// N = 128 cotton 4.81% at 16 substeps (24 before), silk 4.85% at 16 (the
+/// floor of [`unpinned_substeps`]); N = 256 4.77% at 64 (96 before). A
+/// material without a limit keeps
+/// [`XPBD_CHAIN_REACH`]: rubber's drape at N = 128 rests 35% stretched
+/// with 12 substeps against 9% with 24.
+const XPBD_LIMITED_CHAIN_REACH: f32 = 1.5 * XPBD_CHAIN_REACH;
+
 /// Particles along a grid's longer side up to which [`XPBD_CHAIN_REACH`]
 /// holds; past it the reach falls in proportion to the side. The drape at
 /// N = 256 peaked at 5.44% with the 48 substeps of the full reach, 5.13%
@@ -179,7 +190,12 @@ pub fn stable_substep(cloth: &Cloth, settings: &SolverSettings) -> f32 {
             let reach = match cloth.grid() {
                 Some(grid) if chains_lengthen(cloth, settings) => {
                     let side = grid.cols.max(grid.rows) as f32;
-                    XPBD_CHAIN_REACH * (XPBD_CHAIN_FULL_REACH_SIDE / side).min(1.0)
+                    let reach = if cloth.material.stretch_limit.is_some() {
+                        XPBD_LIMITED_CHAIN_REACH
+                    } else {
+                        XPBD_CHAIN_REACH
+                    };
+                    reach * (XPBD_CHAIN_FULL_REACH_SIDE / side).min(1.0)
                 }
                 _ => XPBD_REACH,
             };
@@ -214,10 +230,25 @@ pub fn stable_substeps(cloth: &Cloth, settings: &SolverSettings, dt: f32) -> u32
 
 /// [`stable_substeps`] for a cloth without pins whose every obstacle is a
 /// still ball or half-space: with the chain solves, at least
-/// [`XPBD_UNPINNED_SUBSTEPS_PER_SECOND`].
+/// [`XPBD_UNPINNED_SUBSTEPS_PER_SECOND`] on a grid whose longer side has
+/// at most [`XPBD_UNPINNED_FLOOR_SIDE`] particles, where it was measured.
 pub(crate) fn unpinned_substeps(cloth: &Cloth, settings: &SolverSettings, dt: f32) -> u32 {
-    substeps_at_least(cloth, settings, dt, XPBD_UNPINNED_SUBSTEPS_PER_SECOND)
+    let small = cloth
+        .grid()
+        .is_some_and(|g| g.cols.max(g.rows) <= XPBD_UNPINNED_FLOOR_SIDE);
+    let per_second = if small {
+        XPBD_UNPINNED_SUBSTEPS_PER_SECOND
+    } else {
+        XPBD_CHAIN_SUBSTEPS_PER_SECOND
+    };
+    substeps_at_least(cloth, settings, dt, per_second)
 }
+
+/// The longest grid side (particles) that [`XPBD_UNPINNED_SUBSTEPS_PER_SECOND`]
+/// applies to: it was measured on the drape at N = 32 to 64. At N = 128
+/// silk's landing peaks at 5.02% with 12 substeps, 4.89% with 14 and 4.85%
+/// with 16 (BENCHMARKS.md, twentieth session).
+const XPBD_UNPINNED_FLOOR_SIDE: usize = 64;
 
 /// [`stable_substeps`] with `per_second` substeps a second at least when
 /// the chain solves lengthen them.
