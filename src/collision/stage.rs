@@ -122,6 +122,9 @@ pub struct CollisionStage {
     /// The longest stretch or shear spring when the cache was made (m;
     /// infinite without a cache).
     pub(super) longest_edge: f32,
+    /// The margin (m) of a cache put off until a pass needs it
+    /// ([`CollisionStage::defer_candidates`]).
+    deferred: Option<f32>,
 }
 
 /// The springs of a block of the edge pass that it must look at, alone on
@@ -156,6 +159,24 @@ impl CollisionStage {
         self.stretch_at.built = false;
         self.contacts.begin_step(particles, obstacles.len());
         self.longest_edge = f32::INFINITY;
+        self.deferred = None;
+    }
+
+    /// Puts [`CollisionStage::cache_candidates`] with `margin` (m) off
+    /// until [`CollisionStage::cache_deferred`]: a step in which the
+    /// solver holds every contact itself never needs it (a twentieth of
+    /// the drape's frame at N = 64).
+    pub(crate) fn defer_candidates(&mut self, margin: f32) {
+        self.deferred = Some(margin);
+    }
+
+    /// Makes the cache put off by [`CollisionStage::defer_candidates`],
+    /// if any, from the positions `x` the step started at: the cache the
+    /// step would have made at its start, bit for bit.
+    pub(crate) fn cache_deferred(&mut self, x: &[Vector], springs: &Springs) {
+        if let Some(margin) = self.deferred.take() {
+            self.cache_candidates(x, margin, springs);
+        }
     }
 
     /// Finds once for the step which obstacles each particle at `x` may meet

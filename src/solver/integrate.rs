@@ -26,6 +26,9 @@ pub(crate) struct SubstepOutcome {
     /// (xpbd's lanes, `lane_contacts.rs`): the collision stage may wait
     /// for the step's last substep.
     pub contacts_held: bool,
+    /// At the step's last substep, when the integrator held the contacts:
+    /// the particles it held in contact with an obstacle (0 otherwise).
+    pub touching: u32,
 }
 
 /// Advances positions `x` and velocities `v` by one substep with the
@@ -47,12 +50,14 @@ pub(crate) fn integrate(
         friction: FrictionPolicy::Apply,
         stretch_room: None,
         contacts_held: false,
+        touching: 0,
     };
     let solved = |iterations| SubstepOutcome {
         iterations,
         friction: FrictionPolicy::AlreadySolved,
         stretch_room: None,
         contacts_held: false,
+        touching: 0,
     };
     Ok(match sub.settings.integrator {
         Integrator::ExplicitEuler => {
@@ -87,6 +92,7 @@ pub(crate) fn integrate(
             SubstepOutcome {
                 stretch_room: outcome.stretch_room,
                 contacts_held: outcome.contacts_held,
+                touching: outcome.touching,
                 friction,
                 ..explicit(0)
             }

@@ -138,6 +138,39 @@ impl LaneContacts {
         self.shapes.is_empty()
     }
 
+    /// The lanes a pass pushed out of a shape this substep: the particles
+    /// in contact, as the collision stage would count them.
+    pub fn touching(&self) -> u32 {
+        if self.is_empty() {
+            return 0;
+        }
+        self.touch.iter().map(|&t| u32::from(t != 0)).sum()
+    }
+
+    /// Whether no stretch or shear spring shorter than `longest` (m)
+    /// between two particles the lanes left outside `obstacles` (their
+    /// surfaces moved out by `thickness`, m) can come within half the
+    /// thickness of one: then the collision stage's edge pass has nothing
+    /// to do. A segment between two points outside a half-space stays
+    /// outside it (the outside is convex). Between two points at least
+    /// `R = r + t` from a ball's centre, a segment of length `l` comes no
+    /// closer than `√(R² − l²/4)`, which must be at least `r + t/2`: the
+    /// edge pass's own test of one ball (`collision/edges.rs`). A ball
+    /// beside another shape: not known (a spring may rest across both).
+    pub fn springs_stay_out(obstacles: &[Obstacle], longest: f32, thickness: f32) -> bool {
+        let halfspaces = obstacles.iter().all(|o| o.shape.as_halfspace().is_some());
+        if halfspaces {
+            return true;
+        }
+        let [one] = obstacles else {
+            return false;
+        };
+        one.shape.as_ball().is_some_and(|ball| {
+            let (out, margin) = (ball.radius + thickness, ball.radius + 0.5 * thickness);
+            longest.is_finite() && longest * longest <= 4.0 * (out * out - margin * margin)
+        })
+    }
+
     /// Puts every free lane (inverse mass not zero) back out of every
     /// shape, through its nearest point, and records the push. Returns the
     /// farthest it pushed a lane (m).
@@ -567,6 +600,7 @@ mod tests {
             }
         }
         assert!(moved > n / 4 && moved < n, "{moved} of {n} pushed");
+        assert_eq!(contacts.touching() as usize, moved, "the lanes in contact");
         assert!(
             (pushed - deepest).abs() < 1e-5,
             "{pushed} against {deepest}"
@@ -686,5 +720,45 @@ mod tests {
                 && !contacts.is_empty()
         );
         assert!(!contacts.begin(&[floor, table], (THICKNESS, 0.01), 4) && contacts.is_empty());
+        assert_eq!(contacts.touching(), 0, "nothing held, nothing touching");
+    }
+
+    /// Springs between points the lanes left outside: never into a floor;
+    /// into a lone ball only when long enough that a chord between two
+    /// points on the surface moved out by the thickness dips within half
+    /// the thickness of it; not known for a ball beside another shape.
+    #[test]
+    fn short_springs_stay_out_of_a_lone_ball_and_any_spring_out_of_floors() {
+        let [ball, floor] = ball_and_floor();
+        let stays = |o: &[Obstacle], l: f32| LaneContacts::springs_stay_out(o, l, THICKNESS);
+        assert!(stays(std::slice::from_ref(&floor), 1.0e3));
+        assert!(!stays(&[ball.clone(), floor.clone()], 1.0e-3));
+        let table = Obstacle::cuboid(Vector::splat(0.5), Pose::IDENTITY);
+        assert!(!stays(&[table], 1.0e-3), "edges: the stage's edge pass");
+        assert!(!stays(std::slice::from_ref(&ball), f32::NAN));
+        // Chords of the ball (radius 0.5 at (0, 1, 0)) moved out by the
+        // thickness, through a tilted plane, sampled along their length.
+        let centre = Vector::new(0.0, 1.0, 0.0);
+        let out = 0.5 + THICKNESS;
+        let (mut some_in, mut some_out) = (false, false);
+        for k in 1..60 {
+            let l = 0.005 * k as f32;
+            let half_angle = (0.5 * l / out).asin();
+            let tilt = Vector::new(0.3, 1.0, -0.2).normalize();
+            let side = tilt.cross(Vector::X).normalize();
+            let a = centre + (tilt * half_angle.cos() + side * half_angle.sin()) * out;
+            let b = centre + (tilt * half_angle.cos() - side * half_angle.sin()) * out;
+            let closest = (0..=64)
+                .map(|t| (a + (b - a) * (t as f32 / 64.0) - centre).length())
+                .fold(f32::INFINITY, f32::min);
+            let clear = closest >= 0.5 + 0.5 * THICKNESS;
+            // Within rounding of the border, either answer.
+            if (closest - (0.5 + 0.5 * THICKNESS)).abs() > 1.0e-5 {
+                assert_eq!(stays(std::slice::from_ref(&ball), l), clear, "l = {l}");
+            }
+            some_in |= !clear;
+            some_out |= clear;
+        }
+        assert!(some_in && some_out, "chords on both sides of the border");
     }
 }

@@ -23,7 +23,10 @@ pub struct StepReport {
     /// Particle–obstacle contacts the collision stage resolved, summed over
     /// the substeps it ran: every substep, but only the last when the
     /// integrator held every contact itself (xpbd among still balls and
-    /// half-spaces).
+    /// half-spaces). When the integrator left it nothing to do at the last
+    /// either (every stretch spring within the limit, no spring able to cut
+    /// an obstacle), the stage does not run, and this counts the particles
+    /// the integrator pushed out of an obstacle in that substep.
     pub contacts: u32,
     /// Particle–triangle contacts within the cloth resolved, summed over
     /// substeps (0 without self-collision).

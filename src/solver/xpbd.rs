@@ -106,6 +106,9 @@ pub(crate) struct XpbdOutcome {
     /// ([`LaneContacts::holds`]): the collision stage may wait for the
     /// step's last substep.
     pub contacts_held: bool,
+    /// At the step's last substep, when the lanes held the contacts: the
+    /// particles they pushed out of an obstacle in it (0 otherwise).
+    pub touching: u32,
 }
 
 /// What a grid plan depends on: the grid, and which springs (their storage,
@@ -358,6 +361,7 @@ pub(crate) fn step(
             XpbdOutcome {
                 stretch_room: room,
                 contacts_held: held,
+                touching: if held && last { contacts.touching() } else { 0 },
             }
         }
         _ => {
@@ -384,6 +388,7 @@ pub(crate) fn step(
             XpbdOutcome {
                 stretch_room: None,
                 contacts_held: false,
+                touching: 0,
             }
         }
     }
