@@ -120,6 +120,14 @@ struct Eight {
 #[inline(always)]
 fn eight(e: &mut Eight, m: Motion, fast2: &mut [f32; W]) {
     let (g, h) = (m.gravity.to_array(), m.h);
+    // Into new arrays, not over the old: a pinned lane's velocity selected
+    // back over itself became a masked store, whose reads right after
+    // could not be forwarded (the pass was a seventh of the drape's frame
+    // at N = 128, perf, one thread).
+    let mut out = Eight {
+        w: e.w,
+        ..Eight::default()
+    };
     for k in 0..W {
         let free = e.w[k] != 0.0;
         let mut speed2 = 0.0;
@@ -134,13 +142,14 @@ fn eight(e: &mut Eight, m: Motion, fast2: &mut [f32; W]) {
             };
             // The next one's prediction (`predict`).
             let v = if free { v + (g[a] - v * m.drag) * h } else { v };
-            e.start[a][k] = swept;
-            e.x[a][k] = swept + v * h;
-            e.v[a][k] = v;
+            out.start[a][k] = swept;
+            out.x[a][k] = swept + v * h;
+            out.v[a][k] = v;
             speed2 += v * v;
         }
         fast2[k] = fast2[k].max(speed2);
     }
+    *e = out;
 }
 
 #[cfg(test)]
