@@ -1081,8 +1081,8 @@ unsafe fn limit_chunk<const M: usize>(
     factor: f32,
 ) -> Tally {
     // SAFETY: in bounds by the caller's promise.
-    let [mut xa, mut ya, mut za] = unsafe { lanes.positions::<M>(a) };
-    let [mut xb, mut yb, mut zb] = unsafe { lanes.positions::<M>(b) };
+    let [xa, ya, za] = unsafe { lanes.positions::<M>(a) };
+    let [xb, yb, zb] = unsafe { lanes.positions::<M>(b) };
     let (wa, wb, r) = unsafe {
         (
             load::<M>(lanes.w, a),
@@ -1110,6 +1110,10 @@ unsafe fn limit_chunk<const M: usize>(
         };
     }
     let (mut over, mut far) = (0, 0);
+    // The new positions into new arrays, not selected back over the old
+    // (that became masked stores, whose reads could not be forwarded: as
+    // in `lane_motion.rs`).
+    let [mut na, mut nb] = [[[0.0f32; M]; 3]; 2];
     for c in 0..M {
         let d = [xb[c] - xa[c], yb[c] - ya[c], zb[c] - za[c]];
         let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
@@ -1121,19 +1125,19 @@ unsafe fn limit_chunk<const M: usize>(
         let (sa, sb) = (wa[c] * s, wb[c] * s);
         // Selected, not added as zero: a zero change can flip a zero's sign.
         let pick = |moved: f32, kept: f32| if on { moved } else { kept };
-        xa[c] = pick(xa[c] + d[0] * sa, xa[c]);
-        ya[c] = pick(ya[c] + d[1] * sa, ya[c]);
-        za[c] = pick(za[c] + d[2] * sa, za[c]);
-        xb[c] = pick(xb[c] - d[0] * sb, xb[c]);
-        yb[c] = pick(yb[c] - d[1] * sb, yb[c]);
-        zb[c] = pick(zb[c] - d[2] * sb, zb[c]);
+        na[0][c] = pick(xa[c] + d[0] * sa, xa[c]);
+        na[1][c] = pick(ya[c] + d[1] * sa, ya[c]);
+        na[2][c] = pick(za[c] + d[2] * sa, za[c]);
+        nb[0][c] = pick(xb[c] - d[0] * sb, xb[c]);
+        nb[1][c] = pick(yb[c] - d[1] * sb, yb[c]);
+        nb[2][c] = pick(zb[c] - d[2] * sb, zb[c]);
         over += on as u32;
         far += (on && excess > r[c] * LIMIT_FAR) as u32;
     }
     // SAFETY: as above.
     unsafe {
-        lanes.set_positions(a, [xa, ya, za]);
-        lanes.set_positions(b, [xb, yb, zb]);
+        lanes.set_positions(a, na);
+        lanes.set_positions(b, nb);
     }
     Tally {
         shortened: over,
