@@ -957,9 +957,9 @@ impl LimitMarks<'_> {
     }
 
     /// [`limit_chunk`] on the `M` springs from lanes `a..` to lanes `b..`
-    /// when they are due (else nothing shortened, no room measured),
-    /// marking all their ends when it shortened any (a spring looked at
-    /// again for nothing gives the same bits).
+    /// when they are due (else `None`: nothing shortened, no room
+    /// measured), marking all their ends when it shortened any (a spring
+    /// looked at again for nothing gives the same bits).
     ///
     /// # Safety
     /// `a + M` and `b + M` are at most the length of the marks, of `rest`
@@ -971,18 +971,18 @@ impl LimitMarks<'_> {
         rest: &[f32],
         lanes: &mut View,
         factor: f32,
-    ) -> Tally {
+    ) -> Option<Tally> {
         // SAFETY: in bounds by the caller's promise.
         unsafe {
             if !self.due::<M>((a, b)) {
-                return Tally::NONE;
+                return None;
             }
             let tally = limit_chunk::<M>((a, b), rest, lanes, factor);
             if tally.shortened > 0 {
                 self.moved.get_unchecked_mut(a..a + M).fill(self.pass);
                 self.moved.get_unchecked_mut(b..b + M).fill(self.pass);
             }
-            tally
+            Some(tally)
         }
     }
 }
@@ -1011,16 +1011,23 @@ fn limit_runs(
         let mut done = 0;
         // A run's springs share no particle: `WIDTH` of them at once give
         // the bits of one at a time.
+        // Springs not due are passed over with no tally at all (joined,
+        // their nothing changed no number, but the join was a fifth of
+        // the limit where most are not due: the hammock).
         while done + WIDTH <= len {
             // SAFETY: within the run (asserted).
             let t = unsafe { marks.limit::<WIDTH>((a + done, b + done), rest, lanes, factor) };
-            tally = tally.and(t);
+            if let Some(t) = t {
+                tally = tally.and(t);
+            }
             done += WIDTH;
         }
         while done < len {
             // SAFETY: as above.
             let t = unsafe { marks.limit::<1>((a + done, b + done), rest, lanes, factor) };
-            tally = tally.and(t);
+            if let Some(t) = t {
+                tally = tally.and(t);
+            }
             done += 1;
         }
     }
