@@ -968,6 +968,7 @@ impl LimitMarks<'_> {
     unsafe fn limit<const M: usize>(
         &mut self,
         (a, b): (usize, usize),
+        keep: Option<&[bool; M]>,
         rest: &[f32],
         lanes: &mut View,
         factor: f32,
@@ -977,10 +978,13 @@ impl LimitMarks<'_> {
             if !self.due::<M>((a, b)) {
                 return None;
             }
-            let tally = limit_chunk::<M>((a, b), rest, lanes, factor);
+            let tally = limit_chunk::<M>((a, b), keep, rest, lanes, factor);
             if tally.shortened > 0 {
-                self.moved.get_unchecked_mut(a..a + M).fill(self.pass);
-                self.moved.get_unchecked_mut(b..b + M).fill(self.pass);
+                // The run's lanes only: a lane past it marked moved would
+                // make springs there due for nothing, pass after pass.
+                let len = keep.map_or(M, |k| k.iter().take_while(|&&kept| !kept).count());
+                self.moved.get_unchecked_mut(a..a + len).fill(self.pass);
+                self.moved.get_unchecked_mut(b..b + len).fill(self.pass);
             }
             Some(tally)
         }
@@ -1016,15 +1020,36 @@ fn limit_runs(
         // the limit where most are not due: the hammock).
         while done + WIDTH <= len {
             // SAFETY: within the run (asserted).
-            let t = unsafe { marks.limit::<WIDTH>((a + done, b + done), rest, lanes, factor) };
+            let t =
+                unsafe { marks.limit::<WIDTH>((a + done, b + done), None, rest, lanes, factor) };
             if let Some(t) = t {
                 tally = tally.and(t);
             }
             done += WIDTH;
         }
+        if done == len {
+            continue;
+        }
+        // The short last step as a full one whose lanes past the run keep
+        // their bits, where its lanes stay in the region and its two ends'
+        // lanes do not meet (as the sweep's `run`; one spring at a time it
+        // was a third of the limit on the hammock's short runs). Past the
+        // run it shortens nothing and measures no room; it may look at the
+        // run's last springs when only a lane past them moved, and finds
+        // them within the limit, as they were.
+        let (ta, tb) = (a + done, b + done);
+        if ta.max(tb) + WIDTH <= lanes_len && apart(ta as u32, tb as u32, WIDTH as u32) {
+            let keep: [bool; WIDTH] = std::array::from_fn(|t| t >= len - done);
+            // SAFETY: within the region (tested just above).
+            let t = unsafe { marks.limit::<WIDTH>((ta, tb), Some(&keep), rest, lanes, factor) };
+            if let Some(t) = t {
+                tally = tally.and(t);
+            }
+            continue;
+        }
         while done < len {
             // SAFETY: as above.
-            let t = unsafe { marks.limit::<1>((a + done, b + done), rest, lanes, factor) };
+            let t = unsafe { marks.limit::<1>((a + done, b + done), None, rest, lanes, factor) };
             if let Some(t) = t {
                 tally = tally.and(t);
             }
@@ -1083,10 +1108,14 @@ fn least<const M: usize>(mut room: [f32; M]) -> f32 {
 #[inline(always)]
 unsafe fn limit_chunk<const M: usize>(
     (a, b): (usize, usize),
+    keep: Option<&[bool; M]>,
     rest: &[f32],
     lanes: &mut View,
     factor: f32,
 ) -> Tally {
+    // The lanes `keep` marks hold no spring of this run: never over, no
+    // room (`None`: none kept, which the inlining folds away).
+    let kept = |c: usize| keep.is_some_and(|k| k[c]);
     // SAFETY: in bounds by the caller's promise.
     let [xa, ya, za] = unsafe { lanes.positions::<M>(a) };
     let [xb, yb, zb] = unsafe { lanes.positions::<M>(b) };
@@ -1106,8 +1135,14 @@ unsafe fn limit_chunk<const M: usize>(
         let len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         let limit2 = (r[c] * factor) * (r[c] * factor);
         let q = limit2 - len2;
-        room[c] = if q >= 0.0 { q } else { 0.0 };
-        within &= len2 < limit2 * SURELY_WITHIN;
+        room[c] = if kept(c) {
+            f32::INFINITY
+        } else if q >= 0.0 {
+            q
+        } else {
+            0.0
+        };
+        within &= kept(c) || len2 < limit2 * SURELY_WITHIN;
     }
     let room = least(room);
     if within {
@@ -1127,7 +1162,7 @@ unsafe fn limit_chunk<const M: usize>(
         let excess = len - r[c] * factor;
         let w = wa[c] + wb[c];
         // False for an excess that is not a number too.
-        let on = excess > r[c] * factor * LIMIT_SLACK && w != 0.0;
+        let on = excess > r[c] * factor * LIMIT_SLACK && w != 0.0 && !kept(c);
         let s = excess / (w * len);
         let (sa, sb) = (wa[c] * s, wb[c] * s);
         // Selected, not added as zero: a zero change can flip a zero's sign.
