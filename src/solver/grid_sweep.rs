@@ -1361,14 +1361,27 @@ mod tests {
 
     /// A 13×9 grid, jittered, with a few pinned particles, as lanes.
     fn setup() -> (GridPlan, Lanes) {
-        let cloth = ClothBuilder::new(13, 9).build().unwrap();
+        grid_lanes((13, 9), |i, p| {
+            let j = (i as f32 * 0.37).sin() * 0.01;
+            [p.x + j, p.y - j, p.z + 0.5 * j]
+        })
+    }
+
+    /// A `cols` × `rows` grid's plan and lanes: particle `i` at
+    /// `place(i, p)`, `p` where the builder put it (and where the substep
+    /// started), every 17th pinned.
+    fn grid_lanes(
+        (cols, rows): (usize, usize),
+        place: impl Fn(usize, crate::math::Vector) -> [f32; 3],
+    ) -> (GridPlan, Lanes) {
+        let cloth = ClothBuilder::new(cols, rows).build().unwrap();
         let plan = GridPlan::new(cloth.grid().unwrap(), cloth.springs()).unwrap();
         let mut lanes = Columns::default();
-        for (i, p) in cloth.positions().iter().enumerate() {
-            let j = (i as f32 * 0.37).sin() * 0.01;
-            lanes.x.push(p.x + j);
-            lanes.y.push(p.y - j);
-            lanes.z.push(p.z + 0.5 * j);
+        for (i, &p) in cloth.positions().iter().enumerate() {
+            let [x, y, z] = place(i, p);
+            lanes.x.push(x);
+            lanes.y.push(y);
+            lanes.z.push(z);
             lanes.sx.push(p.x);
             lanes.sy.push(p.y);
             lanes.sz.push(p.z);
@@ -1532,23 +1545,13 @@ mod tests {
     #[test]
     fn regions_left_unmoved_are_passed_over_with_the_same_bits() {
         let stretched = || {
-            let cloth = ClothBuilder::new(12, 5 * BAND_ROWS).build().unwrap();
-            let plan = GridPlan::new(cloth.grid().unwrap(), cloth.springs()).unwrap();
-            assert!(plan.phases[0].len() >= 4, "bands of rows");
-            let mut lanes = Columns::default();
-            for (i, p) in cloth.positions().iter().enumerate() {
+            let (plan, lanes) = grid_lanes((12, 5 * BAND_ROWS), |i, p| {
                 // The first rows stretched by 8% along x and z; the rest as built.
                 let f = if i < 3 * 12 { 1.08 } else { 1.0 };
                 let j = (i as f32 * 0.37).sin() * 1.0e-4;
-                lanes.x.push(p.x * f + j);
-                lanes.y.push(p.y);
-                lanes.z.push(p.z * f);
-                lanes.sx.push(p.x);
-                lanes.sy.push(p.y);
-                lanes.sz.push(p.z);
-                lanes.w.push(if i % 17 == 0 { 0.0 } else { 100.0 });
-            }
-            let lanes = in_lane_order(&plan, lanes);
+                [p.x * f + j, p.y, p.z * f]
+            });
+            assert!(plan.phases[0].len() >= 4, "bands of rows");
             (plan, lanes)
         };
         let (plan, mut reference) = stretched();
