@@ -117,9 +117,7 @@ impl CollisionStage {
         let Some(radius) = self.tracks.one_ball() else {
             return false;
         };
-        let l = self.longest_edge + 2.0 * drift;
-        let (out, margin) = (radius + thickness, radius + 0.5 * thickness);
-        l.is_finite() && l * l <= 4.0 * (out * out - margin * margin)
+        chords_clear_ball(radius, thickness, self.longest_edge + 2.0 * drift)
     }
 
     /// True when the spring `a`–`b` surely stays `margin` metres outside
@@ -144,6 +142,16 @@ impl CollisionStage {
         let (sa, sb) = (self.normal[a].dot(ab), self.normal[b].dot(ab));
         tangent_bound([da, sa], [db, sb]).is_some_and(|least| least >= margin)
     }
+}
+
+/// Whether no segment of length at most `longest` (m) with both ends at
+/// least `thickness` (m) out of a ball of `radius` (m) comes within half
+/// the thickness of it: it passes no nearer the centre than
+/// `√((r + t)² − l²/4)`, which must be at least `r + t/2`. False for a
+/// length that is not finite.
+pub(crate) fn chords_clear_ball(radius: f32, thickness: f32, longest: f32) -> bool {
+    let (out, margin) = (radius + thickness, radius + 0.5 * thickness);
+    longest.is_finite() && longest * longest <= 4.0 * (out * out - margin * margin)
 }
 
 /// The least over `t` in `[0, 1]` of `max(da + t sa, db − (1 − t) sb)`:

@@ -33,6 +33,7 @@ mod tracks;
 pub use contact::{contact, penetration_depth, Contact};
 pub(crate) use contact_planes::ContactPlanes;
 pub use contact_set::{ContactSet, ParticleContact};
+pub(crate) use edges::chords_clear_ball;
 pub use obstacle::{DynamicBody, Obstacle, ObstacleImpulse};
 pub use response::{respond, FrictionPolicy, Response};
 pub(crate) use self_contacts::SelfContactParams;

@@ -22,7 +22,7 @@
 //! times larger than the substep's fastest motion ([`BALL_MOTIONS`]), or
 //! the collision stage, which traces paths, keeps it.
 
-use crate::collision::Obstacle;
+use crate::collision::{chords_clear_ball, Obstacle};
 use crate::math::{simd_available, Vector};
 use crate::parallel::{Disjoint, Team};
 
@@ -155,7 +155,7 @@ impl LaneContacts {
     /// outside it (the outside is convex). Between two points at least
     /// `R = r + t` from a ball's centre, a segment of length `l` comes no
     /// closer than `√(R² − l²/4)`, which must be at least `r + t/2`: the
-    /// edge pass's own test of one ball (`collision/edges.rs`). A ball
+    /// edge pass's own test of one ball ([`chords_clear_ball`]). A ball
     /// beside another shape: not known (a spring may rest across both).
     pub fn springs_stay_out(obstacles: &[Obstacle], longest: f32, thickness: f32) -> bool {
         let halfspaces = obstacles.iter().all(|o| o.shape.as_halfspace().is_some());
@@ -165,10 +165,9 @@ impl LaneContacts {
         let [one] = obstacles else {
             return false;
         };
-        one.shape.as_ball().is_some_and(|ball| {
-            let (out, margin) = (ball.radius + thickness, ball.radius + 0.5 * thickness);
-            longest.is_finite() && longest * longest <= 4.0 * (out * out - margin * margin)
-        })
+        one.shape
+            .as_ball()
+            .is_some_and(|ball| chords_clear_ball(ball.radius, thickness, longest))
     }
 
     /// Puts every free lane (inverse mass not zero) back out of every
