@@ -241,6 +241,22 @@ struct Chunk<'a> {
     touch: &'a mut [u32],
 }
 
+impl<'a> Chunk<'a> {
+    /// The lanes of this chunk from `start` on.
+    #[cfg(target_arch = "x86_64")]
+    fn from(self, start: usize) -> Chunk<'a> {
+        Chunk {
+            x: &mut self.x[start..],
+            y: &mut self.y[start..],
+            z: &mut self.z[start..],
+            start: self.start.map(|s| &s[start..]),
+            w: &self.w[start..],
+            depth: &mut self.depth[start..],
+            touch: &mut self.touch[start..],
+        }
+    }
+}
+
 /// [`run_lanes`], vectorised for AVX2 when `simd` (the same operations
 /// lane by lane, no fused multiply-add: the same bits).
 fn run(chunk: Chunk, law: &Law, simd: bool) -> f32 {
@@ -253,10 +269,169 @@ fn run(chunk: Chunk, law: &Law, simd: bool) -> f32 {
     run_lanes(chunk, law)
 }
 
+/// [`run_lanes`] with AVX2 intrinsics for every whole step of eight lanes,
+/// straight from the chunk's arrays and back (written as arrays selected
+/// lane by lane, the whole steps compiled to masked stores whose reloads
+/// could not be forwarded: a sixth of the drape's frame at N = 128); the
+/// short last step as the portable pass runs it.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn run_avx2(chunk: Chunk, law: &Law) -> f32 {
-    run_lanes(chunk, law)
+unsafe fn run_avx2(mut chunk: Chunk, law: &Law) -> f32 {
+    use std::arch::x86_64::*;
+    let n = chunk.x.len();
+    assert!(
+        [
+            chunk.y.len(),
+            chunk.z.len(),
+            chunk.w.len(),
+            chunk.depth.len(),
+            chunk.touch.len()
+        ] == [n; 5]
+    );
+    assert!(chunk.start.iter().all(|s| s.len() == n));
+    let whole = n - n % W;
+    let mut far = _mm256_setzero_ps();
+    for k in (0..whole).step_by(W) {
+        eight_avx2(&mut chunk, k, law, &mut far);
+    }
+    let rest = run_lanes(chunk.from(whole), law);
+    let mut lanes = [0.0f32; W];
+    _mm256_storeu_ps(lanes.as_mut_ptr(), far);
+    lanes.into_iter().fold(rest, f32::max)
+}
+
+/// [`eight`] on lanes `k..k + 8` of `c` (all in it), in AVX2 registers:
+/// the same operations in the same order, without fused multiply-add,
+/// so the same bits; keeps in `far` the farthest push of each lane.
+/// Writes nothing where no lane is inside a shape nor (with friction)
+/// was pushed this substep: the pass would leave every bit as it is.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x86_64::__m256) {
+    use std::arch::x86_64::*;
+    let at = k..k + W;
+    let (x, y, z) = (
+        c.x[at.clone()].as_mut_ptr(),
+        c.y[at.clone()].as_mut_ptr(),
+        c.z[at.clone()].as_mut_ptr(),
+    );
+    let depth_at = c.depth[at.clone()].as_mut_ptr();
+    let touch_at = c.touch[at.clone()].as_mut_ptr() as *mut __m256i;
+    let mut p = [_mm256_loadu_ps(x), _mm256_loadu_ps(y), _mm256_loadu_ps(z)];
+    let zero = _mm256_setzero_ps();
+    let free = _mm256_cmp_ps::<_CMP_NEQ_UQ>(_mm256_loadu_ps(c.w[at.clone()].as_ptr()), zero);
+    let mut depth = _mm256_loadu_ps(depth_at);
+    let mut touch = _mm256_castsi256_ps(_mm256_loadu_si256(touch_at));
+    let mut normal = [zero; 3];
+    let mut mu = zero;
+    let mut any_inside = zero;
+    for (o, &shape) in law.shapes.iter().enumerate() {
+        let mark = _mm256_castsi256_ps(_mm256_set1_epi32(o as i32 + 1));
+        let (to, n, inside, push);
+        match shape {
+            StillShape::Ball { centre, reach } => {
+                let centre = [centre.x, centre.y, centre.z].map(|v| _mm256_set1_ps(v));
+                let d = [0, 1, 2].map(|a| _mm256_sub_ps(p[a], centre[a]));
+                let d2 = _mm256_add_ps(
+                    _mm256_add_ps(_mm256_mul_ps(d[0], d[0]), _mm256_mul_ps(d[1], d[1])),
+                    _mm256_mul_ps(d[2], d[2]),
+                );
+                // No lane near the ball (with a margin for the rounding of
+                // the square) nor last pushed by it: the shape would change
+                // no bit, and its square root and division are the pass's
+                // dearest operations.
+                let near = _mm256_cmp_ps::<_CMP_LT_OQ>(d2, _mm256_set1_ps(near_ball(reach)));
+                let its = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                    _mm256_castps_si256(touch),
+                    _mm256_castps_si256(mark),
+                ));
+                if _mm256_movemask_ps(_mm256_or_ps(near, its)) == 0 {
+                    continue;
+                }
+                let reach = _mm256_set1_ps(reach);
+                let length = _mm256_sqrt_ps(d2);
+                let recip = _mm256_div_ps(_mm256_set1_ps(1.0), length);
+                // At the centre itself: out through the top.
+                let at_centre = _mm256_cmp_ps::<_CMP_EQ_OQ>(d2, zero);
+                n = [0, 1, 2].map(|a| {
+                    let up = _mm256_set1_ps(if a == 1 { 1.0 } else { 0.0 });
+                    _mm256_blendv_ps(_mm256_mul_ps(d[a], recip), up, at_centre)
+                });
+                to = [0, 1, 2].map(|a| _mm256_add_ps(centre[a], _mm256_mul_ps(n[a], reach)));
+                inside = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(length, reach), free);
+                push = _mm256_and_ps(inside, _mm256_sub_ps(reach, length));
+            }
+            StillShape::Plane { normal: m, offset } => {
+                let m = [m.x, m.y, m.z].map(|v| _mm256_set1_ps(v));
+                let gap = _mm256_sub_ps(
+                    _mm256_set1_ps(offset),
+                    _mm256_add_ps(
+                        _mm256_add_ps(_mm256_mul_ps(m[0], p[0]), _mm256_mul_ps(m[1], p[1])),
+                        _mm256_mul_ps(m[2], p[2]),
+                    ),
+                );
+                n = m;
+                to = [0, 1, 2].map(|a| _mm256_add_ps(p[a], _mm256_mul_ps(m[a], gap)));
+                inside = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(gap, zero), free);
+                push = _mm256_and_ps(inside, gap);
+            }
+        }
+        let coefficient = _mm256_set1_ps(law.friction.map_or(0.0, |f| f[o]));
+        p = [0, 1, 2].map(|a| _mm256_blendv_ps(p[a], to[a], inside));
+        depth = _mm256_add_ps(depth, push);
+        touch = _mm256_blendv_ps(touch, mark, inside);
+        // No push is NaN or −0: `max` as `f32::max` takes it.
+        *far = _mm256_max_ps(*far, push);
+        any_inside = _mm256_or_ps(any_inside, inside);
+        let this = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+            _mm256_castps_si256(touch),
+            _mm256_castps_si256(mark),
+        ));
+        normal = [0, 1, 2].map(|a| _mm256_blendv_ps(normal[a], n[a], this));
+        mu = _mm256_blendv_ps(mu, coefficient, this);
+    }
+    let touched = _mm256_xor_ps(
+        _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+            _mm256_castps_si256(touch),
+            _mm256_setzero_si256(),
+        )),
+        _mm256_castsi256_ps(_mm256_set1_epi32(-1)),
+    );
+    let slides = law.friction.is_some() && _mm256_movemask_ps(touched) != 0;
+    if _mm256_movemask_ps(any_inside) == 0 && !slides {
+        return;
+    }
+    if slides {
+        let start = c.start.map(|s| _mm256_loadu_ps(s[at.clone()].as_ptr()));
+        let slide = [0, 1, 2].map(|a| _mm256_sub_ps(p[a], start[a]));
+        let along = _mm256_add_ps(
+            _mm256_add_ps(
+                _mm256_mul_ps(normal[0], slide[0]),
+                _mm256_mul_ps(normal[1], slide[1]),
+            ),
+            _mm256_mul_ps(normal[2], slide[2]),
+        );
+        let tangent = [0, 1, 2].map(|a| _mm256_sub_ps(slide[a], _mm256_mul_ps(normal[a], along)));
+        let length = _mm256_sqrt_ps(_mm256_add_ps(
+            _mm256_add_ps(
+                _mm256_mul_ps(tangent[0], tangent[0]),
+                _mm256_mul_ps(tangent[1], tangent[1]),
+            ),
+            _mm256_mul_ps(tangent[2], tangent[2]),
+        ));
+        let allowed = _mm256_mul_ps(mu, depth);
+        let whole = _mm256_cmp_ps::<_CMP_LE_OQ>(length, allowed);
+        let scale = _mm256_div_ps(allowed, length);
+        p = [0, 1, 2].map(|a| {
+            let undone = _mm256_blendv_ps(_mm256_mul_ps(tangent[a], scale), tangent[a], whole);
+            _mm256_blendv_ps(p[a], _mm256_sub_ps(p[a], undone), touched)
+        });
+    }
+    _mm256_storeu_ps(x, p[0]);
+    _mm256_storeu_ps(y, p[1]);
+    _mm256_storeu_ps(z, p[2]);
+    _mm256_storeu_ps(depth_at, depth);
+    _mm256_storeu_si256(touch_at, _mm256_castps_si256(touch));
 }
 
 /// Lanes of one vector step of [`run_lanes`] (AVX2's eight `f32`).
@@ -367,7 +542,7 @@ fn maybe_inside(p: &[[f32; W]; 3], shapes: &[StillShape]) -> bool {
     for &shape in shapes {
         match shape {
             StillShape::Ball { centre, reach } => {
-                let near = reach * reach * (1.0 + 1.0e-5);
+                let near = near_ball(reach);
                 for k in 0..W {
                     let d = [p[0][k] - centre.x, p[1][k] - centre.y, p[2][k] - centre.z];
                     any |= d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < near;
@@ -381,6 +556,15 @@ fn maybe_inside(p: &[[f32; W]; 3], shapes: &[StillShape]) -> bool {
         }
     }
     any
+}
+
+/// A squared distance from a ball's centre under which a lane may be
+/// inside it, `reach` (m) out: the square of `reach` with a margin for the
+/// rounding of a squared distance (never under it where the exact test,
+/// `sqrt(d²) < reach`, holds).
+#[inline(always)]
+fn near_ball(reach: f32) -> f32 {
+    reach * reach * (1.0 + 1.0e-5)
 }
 
 /// `run` as an array of eight lanes.
@@ -536,6 +720,26 @@ mod tests {
         lanes
     }
 
+    /// A pass of `contacts` over `lanes` lane by lane, without AVX2, with
+    /// friction when `friction`; returns the farthest push (m).
+    fn portable_pass(contacts: &mut LaneContacts, lanes: &mut Lanes, friction: bool) -> f32 {
+        let [x, y, z, sx, sy, sz, w] = lanes.arrays_mut();
+        let law = Law {
+            shapes: &contacts.shapes,
+            friction: friction.then_some(&contacts.friction[..]),
+        };
+        let chunk = Chunk {
+            x,
+            y,
+            z,
+            start: [&*sx, &*sy, &*sz],
+            w: &*w,
+            depth: &mut contacts.depth,
+            touch: &mut contacts.touch,
+        };
+        run(chunk, &law, false)
+    }
+
     fn bits(lanes: &mut Lanes) -> Vec<u32> {
         lanes
             .arrays_mut()
@@ -609,23 +813,6 @@ mod tests {
         let mut portable = LaneContacts::default();
         portable.begin(&obstacles, (THICKNESS, 0.001), n);
         let mut m = lanes(n);
-        let portable_pass = |contacts: &mut LaneContacts, lanes: &mut Lanes, friction: bool| {
-            let [x, y, z, sx, sy, sz, w] = lanes.arrays_mut();
-            let law = Law {
-                shapes: &contacts.shapes,
-                friction: friction.then_some(&contacts.friction[..]),
-            };
-            let chunk = Chunk {
-                x,
-                y,
-                z,
-                start: [&*sx, &*sy, &*sz],
-                w: &*w,
-                depth: &mut contacts.depth,
-                touch: &mut contacts.touch,
-            };
-            run(chunk, &law, false)
-        };
         let again = portable_pass(&mut portable, &mut m, false);
         assert_eq!(again.to_bits(), pushed.to_bits());
         assert_eq!(bits(&mut m), bits(&mut l));
@@ -648,6 +835,78 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Eight lanes the ball pushed, then carried far from it, still take
+    /// the ball's normal and friction in the next pass; eight far from it
+    /// and never pushed by it pass it over: the vector and the portable
+    /// passes agree to the bit either way.
+    #[test]
+    fn lanes_far_from_the_ball_pass_it_over_to_the_same_bits() {
+        let n = 4 * 8 + 3;
+        let obstacles = ball_and_floor();
+        let (mut vector, mut portable) = (LaneContacts::default(), LaneContacts::default());
+        vector.begin(&obstacles, (THICKNESS, 0.001), n);
+        portable.begin(&obstacles, (THICKNESS, 0.001), n);
+        let place = || {
+            let mut l = Lanes::default();
+            l.resize(n);
+            let [x, y, z, sx, sy, sz, w] = l.arrays_mut();
+            for k in 0..n {
+                let s = k as f32 * 0.01;
+                // Into the ball's top; through the floor far from it; above
+                // the floor far from it; the rest by the ball.
+                let p = match k / 8 {
+                    0 => Vector::new(s, 1.49, 0.0),
+                    1 => Vector::new(4.0 + s, 0.003, 0.5),
+                    2 => Vector::new(-4.0 - s, 0.3, 0.5),
+                    _ => Vector::new(0.0, 1.0 + s, 0.48),
+                };
+                (x[k], y[k], z[k]) = (p.x, p.y, p.z);
+                (sx[k], sy[k], sz[k]) = (p.x - 0.002, p.y + 0.004, p.z);
+                w[k] = 1.0;
+            }
+            l
+        };
+        let (mut l, mut m) = (place(), place());
+        vector.project(&mut l, Team::ALONE);
+        portable_pass(&mut portable, &mut m, false);
+        assert_eq!(bits(&mut l), bits(&mut m));
+        assert!(
+            vector.touch[..8].iter().all(|&t| t == 1),
+            "{:?}",
+            vector.touch
+        );
+        assert!(
+            vector.touch[8..16].iter().all(|&t| t == 2),
+            "{:?}",
+            vector.touch
+        );
+        // The first eight carried 3 m away along x, starts and all.
+        for lanes in [&mut l, &mut m] {
+            let [x, _, _, sx, ..] = lanes.arrays_mut();
+            for k in 0..8 {
+                x[k] += 3.0;
+                sx[k] += 3.0;
+            }
+        }
+        let before = bits(&mut l);
+        vector.project_with_friction(&mut l, Team::ALONE);
+        portable_pass(&mut portable, &mut m, true);
+        let after = bits(&mut l);
+        assert_eq!(after, bits(&mut m));
+        assert_eq!(
+            (&vector.depth, &vector.touch),
+            (&portable.depth, &portable.touch)
+        );
+        assert!(
+            (0..8).any(|k| after[k] != before[k]),
+            "friction by the ball's normal moved none of the carried lanes"
+        );
+        assert!(
+            (16..24).all(|k| (0..3).all(|a| after[a * n + k] == before[a * n + k])),
+            "lanes clear of both and never pushed moved"
+        );
     }
 
     /// A lane pushed 1 mm out of the floor that slid 10 mm along it keeps
