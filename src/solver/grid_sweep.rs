@@ -574,7 +574,8 @@ impl<'a> SharedLanes<'a> {
     }
 }
 
-/// One Gauss–Seidel sweep over every spring: the bands, then the
+/// One Gauss–Seidel sweep over every spring of the kinds `kinds` marks
+/// (by [`crate::cloth::SpringKind::index`]): the bands, then the
 /// boundaries between them, each region's passes in the plan's order; on
 /// several threads of `team`, with the same bits. A region takes all its
 /// passes at once: one handout per phase rather than per pass and phase
@@ -584,9 +585,10 @@ pub(crate) fn sweep(
     plan: &mut GridPlan,
     lanes: &mut Lanes,
     compliance: &[Compliance; 3],
+    kinds: [bool; 3],
     team: Team,
 ) {
-    sweep_with(plan, lanes, compliance, team, simd_available());
+    sweep_with(plan, lanes, compliance, team, simd_available(), kinds);
 }
 
 /// [`sweep`], with the AVX2 kernel only when `simd`.
@@ -596,8 +598,10 @@ fn sweep_with(
     compliance: &[Compliance; 3],
     team: Team,
     simd: bool,
+    kinds: [bool; 3],
 ) {
     let shared = SharedLanes::new(lanes, &mut plan.lambda);
+    let kind_of: [usize; 6] = std::array::from_fn(|p| plan.passes[p].kind.index());
     let k: [Compliance; 6] = std::array::from_fn(|p| compliance[plan.passes[p].kind.index()]);
     let rest: [&[f32]; 6] = std::array::from_fn(|p| plan.rest.get(p));
     for (phase, work) in plan.phases.iter().zip(&plan.work) {
@@ -614,6 +618,9 @@ fn sweep_with(
                     )
                 };
                 for (p, lambda) in lambda.into_iter().enumerate() {
+                    if !kinds[kind_of[p]] {
+                        continue;
+                    }
                     let job = RegionSweep {
                         region,
                         p,
@@ -1447,8 +1454,8 @@ mod tests {
         let (mut plan_a, mut a) = setup();
         let (mut plan_b, mut b) = setup();
         for _ in 0..3 {
-            sweep(&mut plan_a, &mut a, &k, Team::ALONE);
-            sweep_with(&mut plan_b, &mut b, &k, Team::ALONE, false);
+            sweep(&mut plan_a, &mut a, &k, [true; 3], Team::ALONE);
+            sweep_with(&mut plan_b, &mut b, &k, Team::ALONE, false, [true; 3]);
         }
         assert_eq!(bits(&mut a), bits(&mut b));
         // And the sweep did move them: the check can fail.
@@ -1878,7 +1885,7 @@ mod tests {
             let (mut plan, mut lanes) = (plan.clone(), lanes());
             let limited = pool.install(|| {
                 crate::parallel::with_team(parallel, |team| {
-                    sweep(&mut plan, &mut lanes, &k, team);
+                    sweep(&mut plan, &mut lanes, &k, [true; 3], team);
                     limit_stretch(&mut plan, &mut lanes, 1.02, team)
                 })
             });
@@ -1912,7 +1919,7 @@ mod tests {
                 alpha: 0.0,
                 gamma: 0.0,
             };
-            sweep(&mut plan, &mut lanes, &[k; 3], Team::ALONE);
+            sweep(&mut plan, &mut lanes, &[k; 3], [true; 3], Team::ALONE);
             // Stretched by 10%, the sweep pulls every row back inwards.
             let last = plan.lane(cols - 1);
             assert!(
