@@ -84,3 +84,23 @@ fn a_stretch_limit_must_be_a_positive_strain() {
     }
     assert!(Material::rubber().stretch_limit.is_none());
 }
+
+/// The root-free test of the solver's divergence check says what the
+/// largest strain says, either side of it, for each kind of spring.
+#[test]
+fn strain_below_agrees_with_the_largest_strain() {
+    let mut cloth = ClothBuilder::new(5, 4).build().unwrap();
+    let far = cloth.positions()[7] + Vector::new(0.13, -0.05, 0.02);
+    cloth.set_position(7, far).unwrap();
+    for kind in [SpringKind::Stretch, SpringKind::Shear, SpringKind::Bend] {
+        let most = cloth.max_strain(kind);
+        assert!(most > 0.05, "{kind:?}: {most}");
+        for s in [0.5 * most, 0.99 * most, 1.01 * most, 2.0 * most] {
+            assert_eq!(
+                cloth.strain_below(kind, s),
+                most < s,
+                "{kind:?} at {s} (largest {most})"
+            );
+        }
+    }
+}

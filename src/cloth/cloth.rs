@@ -413,6 +413,31 @@ impl Cloth {
         most.into_iter().fold(0.0, f32::max)
     }
 
+    /// Whether every spring of one kind is shorter than `1 + strain` times
+    /// its rest length (false for a length that is not a number). The test
+    /// of [`Self::max_strain`] `< strain` without a root or a division a
+    /// spring: the solver's divergence check runs it once a step.
+    pub fn strain_below(&self, kind: SpringKind, strain: f32) -> bool {
+        let springs = &self.topology.springs;
+        let range = springs.range(kind);
+        let (a, b) = springs.endpoints();
+        let (a, b, rest) = (
+            &a[range.clone()],
+            &b[range.clone()],
+            &springs.rest_lengths()[range],
+        );
+        let x = &self.particles.x;
+        let factor = 1.0 + strain;
+        // One `and` over all (no early exit: the loop stays branch-free).
+        let mut within = true;
+        for ((&a, &b), &rest) in a.iter().zip(b).zip(rest) {
+            let d = x[b as usize] - x[a as usize];
+            let limit = rest * factor;
+            within &= d.length_squared() < limit * limit;
+        }
+        within
+    }
+
     /// Kinetic, gravitational and elastic energy, in joules.
     pub fn energy(&self) -> Energy {
         let p = &self.particles;

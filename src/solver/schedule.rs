@@ -400,7 +400,7 @@ fn is_sane(cloth: &Cloth) -> bool {
     let ok_x = |x: &Vector| x.is_finite() && x.length_squared() < MAX_DISTANCE * MAX_DISTANCE;
     cloth.positions().iter().all(ok_x)
         && cloth.velocities().iter().all(ok_v)
-        && cloth.max_strain(SpringKind::Stretch) < MAX_STRAIN
+        && cloth.strain_below(SpringKind::Stretch, MAX_STRAIN)
 }
 
 /// How far (m) a particle is expected to move in a step of `dt`: twice
