@@ -389,16 +389,22 @@ impl Cloth {
         Some(d.length() / sp.rest_length - 1.0)
     }
 
-    /// The largest strain over the springs of one kind (0 when there is none).
-    pub fn max_strain(&self, kind: SpringKind) -> f32 {
+    /// The springs of one kind: their first and second particles, and
+    /// their rest lengths (m).
+    fn springs_of(&self, kind: SpringKind) -> (&[u32], &[u32], &[f32]) {
         let springs = &self.topology.springs;
         let range = springs.range(kind);
         let (a, b) = springs.endpoints();
-        let (a, b, rest) = (
+        (
             &a[range.clone()],
             &b[range.clone()],
             &springs.rest_lengths()[range],
-        );
+        )
+    }
+
+    /// The largest strain over the springs of one kind (0 when there is none).
+    pub fn max_strain(&self, kind: SpringKind) -> f32 {
+        let (a, b, rest) = self.springs_of(kind);
         let x = &self.particles.x;
         // Eight running maxima (one is a chain of dependent `max`es; the
         // largest is the same value whichever way they are grouped, and
@@ -418,14 +424,7 @@ impl Cloth {
     /// of [`Self::max_strain`] `< strain` without a root or a division a
     /// spring: the solver's divergence check runs it once a step.
     pub fn strain_below(&self, kind: SpringKind, strain: f32) -> bool {
-        let springs = &self.topology.springs;
-        let range = springs.range(kind);
-        let (a, b) = springs.endpoints();
-        let (a, b, rest) = (
-            &a[range.clone()],
-            &b[range.clone()],
-            &springs.rest_lengths()[range],
-        );
+        let (a, b, rest) = self.springs_of(kind);
         let x = &self.particles.x;
         let factor = 1.0 + strain;
         // One `and` over all (no early exit: the loop stays branch-free).

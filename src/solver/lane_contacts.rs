@@ -242,6 +242,17 @@ struct Chunk<'a> {
 }
 
 impl<'a> Chunk<'a> {
+    /// The lanes in the chunk, every array checked to hold them all (once
+    /// a pass, so that the steps' indexing needs no more checks).
+    #[inline(always)]
+    fn len(&self) -> usize {
+        let n = self.x.len();
+        let lens = [self.y.len(), self.z.len(), self.w.len()];
+        assert!(lens == [n; 3] && [self.depth.len(), self.touch.len()] == [n; 2]);
+        assert!(self.start.iter().all(|s| s.len() == n));
+        n
+    }
+
     /// The lanes of this chunk from `start` on.
     #[cfg(target_arch = "x86_64")]
     fn from(self, start: usize) -> Chunk<'a> {
@@ -278,17 +289,7 @@ fn run(chunk: Chunk, law: &Law, simd: bool) -> f32 {
 #[target_feature(enable = "avx2")]
 unsafe fn run_avx2(mut chunk: Chunk, law: &Law) -> f32 {
     use std::arch::x86_64::*;
-    let n = chunk.x.len();
-    assert!(
-        [
-            chunk.y.len(),
-            chunk.z.len(),
-            chunk.w.len(),
-            chunk.depth.len(),
-            chunk.touch.len()
-        ] == [n; 5]
-    );
-    assert!(chunk.start.iter().all(|s| s.len() == n));
+    let n = chunk.len();
     let whole = n - n % W;
     let mut far = _mm256_setzero_ps();
     for k in (0..whole).step_by(W) {
@@ -455,17 +456,7 @@ struct Eight {
 /// padded with pinned lanes. Returns the farthest push (m).
 #[inline(always)]
 fn run_lanes(c: Chunk, law: &Law) -> f32 {
-    let n = c.x.len();
-    assert!(
-        [
-            c.y.len(),
-            c.z.len(),
-            c.w.len(),
-            c.depth.len(),
-            c.touch.len()
-        ] == [n; 5]
-    );
-    assert!(c.start.iter().all(|s| s.len() == n));
+    let n = c.len();
     let mut farthest = [0.0f32; W];
     let mut k = 0;
     while k < n {
