@@ -271,7 +271,7 @@ pub(crate) fn step(
                 project_planes(planes, lane, l, team);
                 contacts.project(l, team);
             }
-            let later = later_sweep(&model.spring_params);
+            let later = later_sweep_kinds(&model.spring_params);
             for it in 0..sub.settings.xpbd_iterations {
                 let kinds = if it == 0 { [true; 3] } else { later };
                 sweep(plan, l, &compliance, kinds, team);
@@ -638,7 +638,7 @@ fn hold_planes(
 }
 
 /// A kind of spring at most this fraction as stiff as the stretch springs
-/// is soft: see [`later_sweep`].
+/// is soft: see [`later_sweep_kinds`].
 const SOFT_FRACTION: f32 = 0.1;
 
 /// The kinds of spring a grid's second and later sweeps of a substep
@@ -649,7 +649,7 @@ const SOFT_FRACTION: f32 = 0.1;
 /// one step whatever its neighbours do; the later sweeps are for the stiff
 /// springs' coupling (the drape's and the pinned sheets' peak stretch the
 /// same to 0.01% without them; the sweeps a sixth cheaper).
-fn later_sweep(params: &[SpringParams; 3]) -> [bool; 3] {
+fn later_sweep_kinds(params: &[SpringParams; 3]) -> [bool; 3] {
     let stretch = params[SpringKind::Stretch.index()].stiffness;
     let bend = params[SpringKind::Bend.index()].stiffness;
     let mut kinds = [true; 3];
@@ -669,13 +669,13 @@ mod tests {
     fn later_sweeps_leave_out_only_soft_bend_springs() {
         let bend = SpringKind::Bend.index();
         for m in Material::presets() {
-            let kinds = later_sweep(&[m.stretch, m.shear, m.bend]);
+            let kinds = later_sweep_kinds(&[m.stretch, m.shear, m.bend]);
             assert!(!kinds[bend], "{}: bend swept again", m.name);
             assert!(kinds[SpringKind::Stretch.index()] && kinds[SpringKind::Shear.index()]);
         }
         let m = Material::cotton();
         let mut stiff = [m.stretch, m.shear, m.bend];
         stiff[bend].stiffness = m.stretch.stiffness / 3.0;
-        assert_eq!(later_sweep(&stiff), [true; 3]);
+        assert_eq!(later_sweep_kinds(&stiff), [true; 3]);
     }
 }
