@@ -588,7 +588,7 @@ pub(crate) fn sweep(
     kinds: [bool; 3],
     team: Team,
 ) {
-    sweep_with(plan, lanes, compliance, team, simd_available(), kinds);
+    sweep_with(plan, lanes, compliance, kinds, team, simd_available());
 }
 
 /// [`sweep`], with the AVX2 kernel only when `simd`.
@@ -596,9 +596,9 @@ fn sweep_with(
     plan: &mut GridPlan,
     lanes: &mut Lanes,
     compliance: &[Compliance; 3],
+    kinds: [bool; 3],
     team: Team,
     simd: bool,
-    kinds: [bool; 3],
 ) {
     let shared = SharedLanes::new(lanes, &mut plan.lambda);
     let kind_of: [usize; 6] = std::array::from_fn(|p| plan.passes[p].kind.index());
@@ -1455,7 +1455,7 @@ mod tests {
         let (mut plan_b, mut b) = setup();
         for _ in 0..3 {
             sweep(&mut plan_a, &mut a, &k, [true; 3], Team::ALONE);
-            sweep_with(&mut plan_b, &mut b, &k, Team::ALONE, false, [true; 3]);
+            sweep_with(&mut plan_b, &mut b, &k, [true; 3], Team::ALONE, false);
         }
         assert_eq!(bits(&mut a), bits(&mut b));
         // And the sweep did move them: the check can fail.
