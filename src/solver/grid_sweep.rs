@@ -410,9 +410,12 @@ impl GridPlan {
 
     /// Starts a substep: runs `f` on the particles of each band and their
     /// lanes ([`Self::lanes_of`]), as [`Self::for_each_band`] does, and
-    /// sets the multipliers of the band's
-    /// lanes back to zero on the same thread (one handout, not a serial fill
-    /// of six arrays: 2% of the main thread's time at N = 128 on two).
+    /// sets the stretch springs' multipliers of the band's lanes back to
+    /// zero on the same thread (one handout, not a serial fill: 2% of the
+    /// main thread's time at N = 128 on two). The chain solves read those;
+    /// the sweeps take the other kinds' as zero where nothing projected
+    /// them yet this substep ([`KindInSweep::from_zero`]), so theirs are
+    /// not filled (four arrays of six: 1.6% of the frame at N = 128).
     pub fn for_each_band_from_zero(
         &mut self,
         team: Team,
@@ -420,8 +423,11 @@ impl GridPlan {
     ) {
         let lane = &self.lane;
         let mut arrays = self.lambda.all_mut().map(Disjoint::new);
-        let lambda: [Disjoint<f32>; 6] =
-            std::array::from_fn(|_| arrays.next().expect("six passes"));
+        let lambda: [Disjoint<f32>; 2] =
+            std::array::from_fn(|_| arrays.next().expect("the stretch passes first"));
+        debug_assert!(self.passes[..2]
+            .iter()
+            .all(|p| p.kind == SpringKind::Stretch));
         team.sum_over(&self.phases[0], |band| {
             for lambda in lambda {
                 // SAFETY: bands are disjoint ranges of lanes.
@@ -585,10 +591,41 @@ pub(crate) fn sweep(
     plan: &mut GridPlan,
     lanes: &mut Lanes,
     compliance: &[Compliance; 3],
-    kinds: [bool; 3],
+    kinds: [KindInSweep; 3],
     team: Team,
 ) {
     sweep_with(plan, lanes, compliance, kinds, team, simd_available());
+}
+
+/// How one sweep takes one kind of spring ([`sweep`]; by
+/// [`SpringKind::index`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct KindInSweep {
+    /// The kind's springs are projected.
+    pub on: bool,
+    /// Nothing projected them yet this substep: their multipliers are
+    /// taken as zero, not read (the arrays are not filled with zeros).
+    pub from_zero: bool,
+    /// A later sweep of this substep reads their multipliers, so they are
+    /// stored (else nothing reads them, and the stores are left out).
+    pub kept: bool,
+}
+
+impl KindInSweep {
+    /// Projected, with multipliers read and stored.
+    #[cfg(test)]
+    pub const READ_AND_KEPT: KindInSweep = KindInSweep {
+        on: true,
+        from_zero: false,
+        kept: true,
+    };
+
+    /// Not projected.
+    pub const OFF: KindInSweep = KindInSweep {
+        on: false,
+        from_zero: false,
+        kept: false,
+    };
 }
 
 /// [`sweep`], with the AVX2 kernel only when `simd`.
@@ -596,7 +633,7 @@ fn sweep_with(
     plan: &mut GridPlan,
     lanes: &mut Lanes,
     compliance: &[Compliance; 3],
-    kinds: [bool; 3],
+    kinds: [KindInSweep; 3],
     team: Team,
     simd: bool,
 ) {
@@ -618,7 +655,8 @@ fn sweep_with(
                     )
                 };
                 for (p, lambda) in lambda.into_iter().enumerate() {
-                    if !kinds[kind_of[p]] {
+                    let kind = kinds[kind_of[p]];
+                    if !kind.on {
                         continue;
                     }
                     let job = RegionSweep {
@@ -627,14 +665,13 @@ fn sweep_with(
                         rest: &rest,
                         k: &k,
                     };
-                    #[cfg(target_arch = "x86_64")]
-                    if simd {
-                        // SAFETY: `simd` only when the CPU has AVX2.
-                        unsafe { sweep_region_avx2(&job, &mut view, lambda) };
-                        continue;
+                    let (view, simd) = (&mut view, simd);
+                    match (kind.from_zero, kind.kept) {
+                        (false, true) => sweep_region_on::<false, true>(&job, view, lambda, simd),
+                        (true, true) => sweep_region_on::<true, true>(&job, view, lambda, simd),
+                        (false, false) => sweep_region_on::<false, false>(&job, view, lambda, simd),
+                        (true, false) => sweep_region_on::<true, false>(&job, view, lambda, simd),
                     }
-                    let _ = simd;
-                    sweep_region(&job, &mut view, lambda);
                 }
                 0
             });
@@ -650,20 +687,47 @@ struct RegionSweep<'a> {
     k: &'a [Compliance; 6],
 }
 
+/// [`sweep_region`], with the AVX2 kernel only when `simd`; `ZERO` and
+/// `KEPT` as [`KindInSweep::from_zero`] and [`KindInSweep::kept`].
+#[inline(always)]
+fn sweep_region_on<const ZERO: bool, const KEPT: bool>(
+    job: &RegionSweep,
+    view: &mut View,
+    lambda: &mut [f32],
+    simd: bool,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if simd {
+        // SAFETY: `simd` only when the CPU has AVX2.
+        unsafe { sweep_region_avx2::<ZERO, KEPT>(job, view, lambda) };
+        return;
+    }
+    let _ = simd;
+    sweep_region::<ZERO, KEPT>(job, view, lambda);
+}
+
 // One family a call, not the region's six: the six in one function made
 // one of 60 KB whose registers spilled (the sweep 7% slower on one thread).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn sweep_region_avx2(job: &RegionSweep, view: &mut View, lambda: &mut [f32]) {
-    sweep_region(job, view, lambda);
+unsafe fn sweep_region_avx2<const ZERO: bool, const KEPT: bool>(
+    job: &RegionSweep,
+    view: &mut View,
+    lambda: &mut [f32],
+) {
+    sweep_region::<ZERO, KEPT>(job, view, lambda);
 }
 
 /// The family's runs in the region, with its multipliers there.
 #[inline(always)]
-fn sweep_region(job: &RegionSweep, view: &mut View, lambda: &mut [f32]) {
+fn sweep_region<const ZERO: bool, const KEPT: bool>(
+    job: &RegionSweep,
+    view: &mut View,
+    lambda: &mut [f32],
+) {
     let rest = &job.rest[job.p][job.region.lanes.clone()];
     for &seg in &job.region.runs[job.p] {
-        run(seg, rest, lambda, view, job.k[job.p]);
+        run::<ZERO, KEPT>(seg, rest, lambda, view, job.k[job.p]);
     }
 }
 
@@ -1242,9 +1306,16 @@ fn project(
 /// Springs handled by one vector step: the 8 lanes of an AVX2 register.
 const WIDTH: usize = 8;
 
-/// The springs of one run, `WIDTH` at a time.
+/// The springs of one run, `WIDTH` at a time (`ZERO`, `KEPT`: as for
+/// [`chunk`]).
 #[inline(always)]
-fn run(seg: Segment, rest: &[f32], lambda: &mut [f32], lanes: &mut View, k: Compliance) {
+fn run<const ZERO: bool, const KEPT: bool>(
+    seg: Segment,
+    rest: &[f32],
+    lambda: &mut [f32],
+    lanes: &mut View,
+    k: Compliance,
+) {
     let (a0, b0, len) = (seg.a as usize, seg.b as usize, seg.len as usize);
     let room = lanes.len();
     // Once a run, for every step's unchecked loads and stores below.
@@ -1256,7 +1327,7 @@ fn run(seg: Segment, rest: &[f32], lambda: &mut [f32], lanes: &mut View, k: Comp
     while done + WIDTH <= len {
         // Full steps: copies of a constant length, which are vector loads and stores.
         // SAFETY: within the run, which is within the region (asserted).
-        unsafe { chunk::<WIDTH>((a0 + done, b0 + done), None, rest, lambda, lanes, k) };
+        unsafe { chunk::<WIDTH, ZERO, KEPT>((a0 + done, b0 + done), None, rest, lambda, lanes, k) };
         done += WIDTH;
     }
     if done == len {
@@ -1272,25 +1343,27 @@ fn run(seg: Segment, rest: &[f32], lambda: &mut [f32], lanes: &mut View, k: Comp
     if a.max(b) + WIDTH <= room && apart(a as u32, b as u32, WIDTH as u32) {
         let keep: [bool; WIDTH] = std::array::from_fn(|t| t >= len - done);
         // SAFETY: within the region (tested just above).
-        unsafe { chunk::<WIDTH>((a, b), Some(&keep), rest, lambda, lanes, k) };
+        unsafe { chunk::<WIDTH, ZERO, KEPT>((a, b), Some(&keep), rest, lambda, lanes, k) };
         return;
     }
     while done < len {
         // SAFETY: within the run (asserted above).
-        unsafe { chunk::<1>((a0 + done, b0 + done), None, rest, lambda, lanes, k) };
+        unsafe { chunk::<1, ZERO, KEPT>((a0 + done, b0 + done), None, rest, lambda, lanes, k) };
         done += 1;
     }
 }
 
 /// Projects the `M` springs from lanes `a..a + M` to lanes `b..b + M`,
 /// leaving the lanes `keep` marks as they were (their springs are not
-/// projected; `None`: no lane kept, which the inlining folds away).
+/// projected; `None`: no lane kept, which the inlining folds away). With
+/// `ZERO` the multipliers start at zero instead of being read; with
+/// `KEPT` they are stored. Zero read or zero taken, the bits are the same.
 ///
 /// # Safety
 /// `a + M` and `b + M` are at most the view's length, which `rest` and
 /// `lambda` have too.
 #[inline(always)]
-unsafe fn chunk<const M: usize>(
+unsafe fn chunk<const M: usize, const ZERO: bool, const KEPT: bool>(
     (a, b): (usize, usize),
     keep: Option<&[bool; M]>,
     rest: &[f32],
@@ -1318,7 +1391,13 @@ unsafe fn chunk<const M: usize>(
         )
     };
     let (wa, wb) = unsafe { (load::<M>(lanes.w, a), load::<M>(lanes.w, b)) };
-    let (mut r, mut l) = unsafe { (load::<M>(rest, a), load::<M>(lambda, a)) };
+    let mut r = unsafe { load::<M>(rest, a) };
+    // The lanes kept need their multipliers as they were, to store back.
+    let mut l = if ZERO && (keep.is_none() || !KEPT) {
+        [0.0; M]
+    } else {
+        unsafe { load::<M>(lambda, a) }
+    };
     if let Some(keep) = keep {
         // A rest length of 0: no spring, no change (`project`).
         for c in 0..M {
@@ -1326,6 +1405,9 @@ unsafe fn chunk<const M: usize>(
         }
     }
     let old = keep.map(|_| (xa, ya, za, xb, yb, zb, l));
+    if ZERO {
+        l = [0.0; M];
+    }
     for c in 0..M {
         let motion = [
             (xb[c] - sxb[c]) - (xa[c] - sxa[c]),
@@ -1357,7 +1439,9 @@ unsafe fn chunk<const M: usize>(
     unsafe {
         lanes.set_positions(a, [xa, ya, za]);
         lanes.set_positions(b, [xb, yb, zb]);
-        store(lambda, a, l);
+        if KEPT {
+            store(lambda, a, l);
+        }
     }
 }
 
@@ -1454,8 +1538,21 @@ mod tests {
         let (mut plan_a, mut a) = setup();
         let (mut plan_b, mut b) = setup();
         for _ in 0..3 {
-            sweep(&mut plan_a, &mut a, &k, [true; 3], Team::ALONE);
-            sweep_with(&mut plan_b, &mut b, &k, [true; 3], Team::ALONE, false);
+            sweep(
+                &mut plan_a,
+                &mut a,
+                &k,
+                [KindInSweep::READ_AND_KEPT; 3],
+                Team::ALONE,
+            );
+            sweep_with(
+                &mut plan_b,
+                &mut b,
+                &k,
+                [KindInSweep::READ_AND_KEPT; 3],
+                Team::ALONE,
+                false,
+            );
         }
         assert_eq!(bits(&mut a), bits(&mut b));
         // And the sweep did move them: the check can fail.
@@ -1744,7 +1841,9 @@ mod tests {
             b: 16,
             len: 11,
         };
-        let sweep = |masked: bool| {
+        // Multipliers read, or taken as zero (`zero`): the lanes past the
+        // run keep theirs either way.
+        let sweep = |masked: bool, zero: bool| {
             let [mut x, mut y, mut z, sx, sy, sz, w, rest, mut lambda] = arrays();
             let mut view = View {
                 x: &mut x,
@@ -1755,22 +1854,37 @@ mod tests {
                 sz: &sz,
                 w: &w,
             };
-            if masked {
-                run(seg, &rest, &mut lambda, &mut view, k);
-            } else {
-                for t in 0..seg.len as usize {
-                    assert!(16 + t < view.len() && rest.len() == view.len());
-                    // SAFETY: in bounds (asserted).
-                    unsafe { chunk::<1>((t, 16 + t), None, &rest, &mut lambda, &mut view, k) };
+            let (rest, lambda_ref) = (&rest, &mut lambda);
+            match (masked, zero) {
+                (true, false) => run::<false, true>(seg, rest, lambda_ref, &mut view, k),
+                (true, true) => run::<true, true>(seg, rest, lambda_ref, &mut view, k),
+                (false, _) => {
+                    for t in 0..seg.len as usize {
+                        assert!(16 + t < view.len() && rest.len() == view.len());
+                        let at = (t, 16 + t);
+                        // SAFETY: in bounds (asserted).
+                        unsafe {
+                            if zero {
+                                chunk::<1, true, true>(at, None, rest, lambda_ref, &mut view, k)
+                            } else {
+                                chunk::<1, false, true>(at, None, rest, lambda_ref, &mut view, k)
+                            }
+                        };
+                    }
                 }
             }
             [x, y, z, lambda].map(|v| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
         };
-        let (masked, single) = (sweep(true), sweep(false));
-        assert_eq!(masked, single);
-        let [x, ..] = arrays();
-        assert_ne!(masked[0][10], x[10].to_bits(), "the last spring moved");
-        assert_eq!(masked[0][11], x[11].to_bits(), "a masked lane stayed");
+        for zero in [false, true] {
+            let (masked, single) = (sweep(true, zero), sweep(false, zero));
+            assert_eq!(masked, single);
+            let [x, .., lambda] = arrays();
+            assert_ne!(masked[0][10], x[10].to_bits(), "the last spring moved");
+            assert_eq!(masked[0][11], x[11].to_bits(), "a masked lane stayed");
+            assert_eq!(masked[3][11], lambda[11].to_bits(), "its multiplier too");
+        }
+        // Taken as zero, the multipliers give other positions than those read.
+        assert_ne!(sweep(true, true)[0], sweep(true, false)[0]);
     }
 
     #[test]
@@ -1885,7 +1999,13 @@ mod tests {
             let (mut plan, mut lanes) = (plan.clone(), lanes());
             let limited = pool.install(|| {
                 crate::parallel::with_team(parallel, |team| {
-                    sweep(&mut plan, &mut lanes, &k, [true; 3], team);
+                    sweep(
+                        &mut plan,
+                        &mut lanes,
+                        &k,
+                        [KindInSweep::READ_AND_KEPT; 3],
+                        team,
+                    );
                     limit_stretch(&mut plan, &mut lanes, 1.02, team)
                 })
             });
@@ -1919,7 +2039,13 @@ mod tests {
                 alpha: 0.0,
                 gamma: 0.0,
             };
-            sweep(&mut plan, &mut lanes, &[k; 3], [true; 3], Team::ALONE);
+            sweep(
+                &mut plan,
+                &mut lanes,
+                &[k; 3],
+                [KindInSweep::READ_AND_KEPT; 3],
+                Team::ALONE,
+            );
             // Stretched by 10%, the sweep pulls every row back inwards.
             let last = plan.lane(cols - 1);
             assert!(

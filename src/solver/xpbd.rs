@@ -43,7 +43,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use super::general_sweep::{self, PackedParticles};
 use super::grid_chains::ChainScratch;
-use super::grid_sweep::{limit_stretch, sweep, Compliance, GridPlan, Lanes};
+use super::grid_sweep::{limit_stretch, sweep, Compliance, GridPlan, KindInSweep, Lanes};
 use super::lane_contacts::LaneContacts;
 use super::lane_motion::{self, Motion};
 use super::strain_limit;
@@ -272,8 +272,9 @@ pub(crate) fn step(
                 contacts.project(l, team);
             }
             let later = later_sweep_kinds(&model.spring_params);
-            for it in 0..sub.settings.xpbd_iterations {
-                let kinds = if it == 0 { [true; 3] } else { later };
+            let sweeps = sub.settings.xpbd_iterations;
+            for it in 0..sweeps {
+                let kinds = kinds_in_sweep(it, sweeps, later, sub.settings.xpbd_chains);
                 sweep(plan, l, &compliance, kinds, team);
                 project_planes(planes, lane, l, team);
             }
@@ -657,10 +658,57 @@ fn later_sweep_kinds(params: &[SpringParams; 3]) -> [bool; 3] {
     kinds
 }
 
+/// How sweep `it` of a substep's `sweeps` takes each kind of spring (by
+/// [`SpringKind::index`]): the first takes every kind, the later ones the
+/// kinds `later` says. A kind's multipliers start from zero where no
+/// solve before this sweep projected it this substep (the chain solves,
+/// when `chains`, project the stretch springs), and are kept where a later
+/// sweep takes it: one sweep a substep neither reads nor stores the shear
+/// and bend springs' multipliers.
+fn kinds_in_sweep(it: u32, sweeps: u32, later: [bool; 3], chains: bool) -> [KindInSweep; 3] {
+    let on = |k: usize, sweep: u32| sweep == 0 || later[k];
+    std::array::from_fn(|k| {
+        if !on(k, it) {
+            return KindInSweep::OFF;
+        }
+        let chained = chains && k == SpringKind::Stretch.index();
+        KindInSweep {
+            on: true,
+            from_zero: !chained && (0..it).all(|before| !on(k, before)),
+            kept: (it + 1..sweeps).any(|after| on(k, after)),
+        }
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::cloth::Material;
+
+    /// The multipliers are read only where a solve before stored them and
+    /// stored only where a sweep after reads them.
+    #[test]
+    fn sweeps_read_only_the_multipliers_stored_before_them() {
+        let (stretch, shear, bend) = (0, 1, 2);
+        let soft_bend = [true, true, false];
+        // One sweep after the chains: the stretch springs' come from them.
+        let one = kinds_in_sweep(0, 1, soft_bend, true);
+        assert!(!one[stretch].from_zero && !one[stretch].kept);
+        assert!(one[shear].from_zero && !one[shear].kept);
+        assert!(one[bend].from_zero && !one[bend].kept);
+        // Two: the second reads what the first stored, but no soft bend springs.
+        let first = kinds_in_sweep(0, 2, soft_bend, true);
+        let second = kinds_in_sweep(1, 2, soft_bend, true);
+        assert!(first[shear].from_zero && first[shear].kept);
+        assert!(first[bend].from_zero && !first[bend].kept);
+        assert!(!second[shear].from_zero && !second[shear].kept);
+        assert_eq!(second[bend], KindInSweep::OFF);
+        // Without the chains the stretch springs start from zero too.
+        let alone = kinds_in_sweep(0, 3, [true; 3], false);
+        assert!(alone.iter().all(|k| k.on && k.from_zero && k.kept));
+        let middle = kinds_in_sweep(1, 3, [true; 3], false);
+        assert!(middle.iter().all(|k| k.on && !k.from_zero && k.kept));
+    }
 
     /// Every preset's bend springs are soft and left to the first sweep;
     /// bend springs as stiff as a third of the stretch springs are swept
