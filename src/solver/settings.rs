@@ -38,11 +38,13 @@ pub struct SolverSettings {
     /// Local/global iterations of the fast mass-spring solver.
     #[serde(deserialize_with = "crate::error::de::at_least_one")]
     pub fms_iterations: u32,
-    /// Gauss–Seidel sweeps over the springs per substep of the small-steps
-    /// (XPBD) solver: more substeps converge better, more sweeps cost no
-    /// collision work. On a grid the sweeps after the first leave out bend
-    /// springs a tenth as stiff as the stretch springs or softer (every
-    /// preset's), which one sweep meets.
+    /// Solves of the springs per substep of the small-steps (XPBD)
+    /// solver: Gauss–Seidel sweeps over the springs, of which on a grid
+    /// cloth the chain solves ([`Self::xpbd_chains`]) count as the first
+    /// (one sweep fewer follows them, never none). More substeps converge
+    /// better, more sweeps cost no collision work. On a grid the sweeps
+    /// after the first leave out bend springs a tenth as stiff as the
+    /// stretch springs or softer (every preset's), which one sweep meets.
     #[serde(deserialize_with = "crate::error::de::at_least_one")]
     pub xpbd_iterations: u32,
     /// Before each substep's sweeps, solve the stretch springs of every
