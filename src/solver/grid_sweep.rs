@@ -1017,14 +1017,16 @@ impl LimitMarks<'_> {
                 self.moved.get_unchecked(b..b + M),
             )
         };
-        // The latest pass to move any end, without a branch per lane: a
-        // maximum over whole vectors, where `any` took a test and a jump
-        // for each of 2M lanes (a fifth of the hammock's limit).
-        let mut latest = 0;
+        // Whether the pass before or this one moved any end, without a
+        // branch per lane (`any` took a test and a jump for each of 2M
+        // lanes, a fifth of the hammock's limit): the lanes' comparisons
+        // joined by `or`, which is a vector compare and one test.
+        let since = self.pass - 1;
+        let mut moved = 0u32;
         for c in 0..M {
-            latest = latest.max(ma[c]).max(mb[c]);
+            moved |= u32::from(ma[c] >= since) | u32::from(mb[c] >= since);
         }
-        latest + 1 >= self.pass
+        moved != 0
     }
 
     /// [`limit_chunk`] on the `M` springs from lanes `a..` to lanes `b..`
