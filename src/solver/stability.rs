@@ -94,8 +94,43 @@ const XPBD_CHAIN_REACH: f32 = 5.7;
 /// floor of [`unpinned_substeps`]); N = 256 4.77% at 64 (96 before). A
 /// material without a limit keeps
 /// [`XPBD_CHAIN_REACH`]: rubber's drape at N = 128 rests 35% stretched
-/// with 12 substeps against 9% with 24.
+/// with 12 substeps against 9% with 24. A cloth without pins on still
+/// round obstacles takes [`limited_chain_substeps`] instead.
 const XPBD_LIMITED_CHAIN_REACH: f32 = 1.5 * XPBD_CHAIN_REACH;
+
+/// Automatic substeps a second with the chain solves for a cloth without
+/// pins on still balls and half-spaces, of a material with a stretch limit,
+/// on a grid whose longer side has up to [`XPBD_LIMITED_CHAIN_SIDE`]
+/// particles; they grow with the square of the side past it, whatever the
+/// stiffness. Nothing hangs such a cloth: its stretch is a landing's,
+/// which the limit's passes hold after the chains and one sweep, and how
+/// far they carry a correction is counted in particles (a stiffer spring
+/// the chains meet just as exactly). Measured, peak stretch over every
+/// frame of the drape (BENCHMARKS.md, twenty-fourth session), silk, cotton,
+/// denim, leather and canvas: at most 4.85% with 12 substeps at N = 80 to
+/// 128; at N = 160 5.18–5.75% with 12, 4.72–5.00% with 16, 4.64–4.88%
+/// with 20; at N = 192 6.9–9.2% with 12, 4.71–5.24% with 20, silk 4.92%
+/// with 27; at N = 256 4.79–5.71% with 32, 4.63–4.75% with 48.
+/// [`XPBD_LIMITED_CHAIN_REACH`] gave 16 substeps at N = 128 and 64 at 256
+/// to cotton, 49 and 193 to canvas. A hanging cloth is another matter: the
+/// `pins` sheet at N = 128 hung by its centre peaks at 10% with 16
+/// substeps against 4.6% with canvas's 49.
+const XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND: f32 = 720.0;
+
+/// The longest grid side (particles) at which
+/// [`XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND`] holds unscaled.
+const XPBD_LIMITED_CHAIN_SIDE: f32 = 128.0;
+
+/// The automatic substeps of a frame step of `dt` seconds with the chain
+/// solves for a cloth of a material with a stretch limit, without pins, on
+/// still balls and half-spaces, on a grid whose longer side has `side`
+/// particles: [`XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND`], times the square
+/// of the side over [`XPBD_LIMITED_CHAIN_SIDE`] past it.
+fn limited_chain_substeps(side: f32, dt: f32) -> f32 {
+    let scale = (side / XPBD_LIMITED_CHAIN_SIDE).max(1.0);
+    // A thousandth below: 1/60 s at 720 a second is 12, not 13.
+    (dt * XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND * scale * scale - 1.0e-3).ceil()
+}
 
 /// Particles along a grid's longer side up to which [`XPBD_CHAIN_REACH`]
 /// holds; past it the reach falls in proportion to the side. The drape at
@@ -231,23 +266,34 @@ pub fn stable_substeps(cloth: &Cloth, settings: &SolverSettings, dt: f32) -> u32
 /// [`stable_substeps`] for a cloth without pins whose every obstacle is a
 /// still ball or half-space: with the chain solves, at least
 /// [`XPBD_UNPINNED_SUBSTEPS_PER_SECOND`] on a grid whose longer side has
-/// at most [`XPBD_UNPINNED_FLOOR_SIDE`] particles, where it was measured.
+/// at most [`XPBD_UNPINNED_FLOOR_SIDE`] particles, where it was measured;
+/// for a material with a stretch limit, [`limited_chain_substeps`] at any
+/// size.
 pub(crate) fn unpinned_substeps(cloth: &Cloth, settings: &SolverSettings, dt: f32) -> u32 {
-    let small = cloth
-        .grid()
-        .is_some_and(|g| g.cols.max(g.rows) <= XPBD_UNPINNED_FLOOR_SIDE);
-    let per_second = if small {
-        XPBD_UNPINNED_SUBSTEPS_PER_SECOND
-    } else {
-        XPBD_CHAIN_SUBSTEPS_PER_SECOND
-    };
-    substeps_at_least(cloth, settings, dt, per_second)
+    let limited = cloth.material.stretch_limit.is_some();
+    match cloth.grid() {
+        Some(grid) if limited && chains_lengthen(cloth, settings) => {
+            let side = grid.cols.max(grid.rows) as f32;
+            let k = limited_chain_substeps(side, dt)
+                .max((dt * XPBD_UNPINNED_SUBSTEPS_PER_SECOND - 1.0e-3).ceil());
+            if k.is_finite() {
+                k.clamp(1.0, 1.0e6) as u32
+            } else {
+                1
+            }
+        }
+        Some(grid) if grid.cols.max(grid.rows) <= XPBD_UNPINNED_FLOOR_SIDE => {
+            substeps_at_least(cloth, settings, dt, XPBD_UNPINNED_SUBSTEPS_PER_SECOND)
+        }
+        _ => substeps_at_least(cloth, settings, dt, XPBD_CHAIN_SUBSTEPS_PER_SECOND),
+    }
 }
 
 /// The longest grid side (particles) that [`XPBD_UNPINNED_SUBSTEPS_PER_SECOND`]
-/// applies to: it was measured on the drape at N = 32 to 64. At N = 128
-/// silk's landing peaks at 5.02% with 12 substeps, 4.89% with 14 and 4.85%
-/// with 16 (BENCHMARKS.md, twentieth session).
+/// applies to for a material without a stretch limit: it was measured on
+/// the drape at N = 32 to 64 (rubber's drape at N = 128 peaks at 97% with
+/// 12 substeps and 82% with 16). The presets with a limit peak at most at
+/// 4.85% with 12 up to N = 128 (BENCHMARKS.md, twenty-fourth session).
 const XPBD_UNPINNED_FLOOR_SIDE: usize = 64;
 
 /// [`stable_substeps`] with `per_second` substeps a second at least when
@@ -263,5 +309,20 @@ fn substeps_at_least(cloth: &Cloth, settings: &SolverSettings, dt: f32, per_seco
         k.clamp(1.0, 1.0e6) as u32
     } else {
         1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_limited_cloths_substeps_grow_with_the_square_of_its_side_past_128() {
+        let dt = 1.0 / 60.0;
+        assert_eq!(limited_chain_substeps(64.0, dt), 12.0);
+        assert_eq!(limited_chain_substeps(128.0, dt), 12.0);
+        assert_eq!(limited_chain_substeps(160.0, dt), 19.0);
+        assert_eq!(limited_chain_substeps(256.0, dt), 48.0);
+        assert_eq!(limited_chain_substeps(256.0, 2.0 * dt), 96.0);
     }
 }
