@@ -186,11 +186,7 @@ const XPBD_EDGE_SUBSTEPS_PER_SECOND: f32 = 1920.0;
 pub(crate) fn edge_substeps(dt: f32) -> u32 {
     // A thousandth below: 1/60 s at 1920 a second is 32, not 33.
     let k = (dt * XPBD_EDGE_SUBSTEPS_PER_SECOND - 1.0e-3).ceil();
-    if k.is_finite() {
-        k.clamp(1.0, 1.0e6) as u32
-    } else {
-        1
-    }
+    whole_substeps(k)
 }
 
 /// Whether the chain solves lengthen the automatic substeps of `settings`
@@ -276,11 +272,7 @@ pub(crate) fn unpinned_substeps(cloth: &Cloth, settings: &SolverSettings, dt: f3
             let side = grid.cols.max(grid.rows) as f32;
             let k = limited_chain_substeps(side, dt)
                 .max((dt * XPBD_UNPINNED_SUBSTEPS_PER_SECOND - 1.0e-3).ceil());
-            if k.is_finite() {
-                k.clamp(1.0, 1.0e6) as u32
-            } else {
-                1
-            }
+            whole_substeps(k)
         }
         Some(grid) if grid.cols.max(grid.rows) <= XPBD_UNPINNED_FLOOR_SIDE => {
             substeps_at_least(cloth, settings, dt, XPBD_UNPINNED_SUBSTEPS_PER_SECOND)
@@ -305,6 +297,12 @@ fn substeps_at_least(cloth: &Cloth, settings: &SolverSettings, dt: f32, per_seco
         // A thousandth below: 1/60 s at 960 a second is 16, not 17.
         k = k.max((dt * per_second - 1.0e-3).ceil());
     }
+    whole_substeps(k)
+}
+
+/// A substep count from a whole number `k` of them: 1 to a million, and 1
+/// for one that is not finite.
+fn whole_substeps(k: f32) -> u32 {
     if k.is_finite() {
         k.clamp(1.0, 1.0e6) as u32
     } else {
