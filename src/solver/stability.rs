@@ -117,6 +117,9 @@ const XPBD_LIMITED_CHAIN_REACH: f32 = 1.5 * XPBD_CHAIN_REACH;
 /// substeps against 4.6% with canvas's 49.
 const XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND: f32 = 720.0;
 
+// The side rule's floor is the unpinned floor (`unpinned_substeps`).
+const _: () = assert!(XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND >= XPBD_UNPINNED_SUBSTEPS_PER_SECOND);
+
 /// The longest grid side (particles) at which
 /// [`XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND`] holds unscaled.
 const XPBD_LIMITED_CHAIN_SIDE: f32 = 128.0;
@@ -128,8 +131,14 @@ const XPBD_LIMITED_CHAIN_SIDE: f32 = 128.0;
 /// of the side over [`XPBD_LIMITED_CHAIN_SIDE`] past it.
 fn limited_chain_substeps(side: f32, dt: f32) -> f32 {
     let scale = (side / XPBD_LIMITED_CHAIN_SIDE).max(1.0);
-    // A thousandth below: 1/60 s at 720 a second is 12, not 13.
-    (dt * XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND * scale * scale - 1.0e-3).ceil()
+    substeps_at_rate(dt, XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND * scale * scale)
+}
+
+/// The whole substeps of a frame step of `dt` seconds at `per_second`
+/// substeps a second, rounded up from a thousandth below: 1/60 s at 960 a
+/// second is 16, not 17.
+fn substeps_at_rate(dt: f32, per_second: f32) -> f32 {
+    (dt * per_second - 1.0e-3).ceil()
 }
 
 /// Particles along a grid's longer side up to which [`XPBD_CHAIN_REACH`]
@@ -184,9 +193,7 @@ const XPBD_EDGE_SUBSTEPS_PER_SECOND: f32 = 1920.0;
 /// The automatic substeps of a frame step of `dt` seconds near still
 /// obstacles with edges: at least [`XPBD_EDGE_SUBSTEPS_PER_SECOND`].
 pub(crate) fn edge_substeps(dt: f32) -> u32 {
-    // A thousandth below: 1/60 s at 1920 a second is 32, not 33.
-    let k = (dt * XPBD_EDGE_SUBSTEPS_PER_SECOND - 1.0e-3).ceil();
-    whole_substeps(k)
+    whole_substeps(substeps_at_rate(dt, XPBD_EDGE_SUBSTEPS_PER_SECOND))
 }
 
 /// Whether the chain solves lengthen the automatic substeps of `settings`
@@ -269,10 +276,10 @@ pub(crate) fn unpinned_substeps(cloth: &Cloth, settings: &SolverSettings, dt: f3
     let limited = cloth.material.stretch_limit.is_some();
     match cloth.grid() {
         Some(grid) if limited && chains_lengthen(cloth, settings) => {
+            // At least XPBD_UNPINNED_SUBSTEPS_PER_SECOND: the side rule's
+            // own rate at N = 128 and below.
             let side = grid.cols.max(grid.rows) as f32;
-            let k = limited_chain_substeps(side, dt)
-                .max((dt * XPBD_UNPINNED_SUBSTEPS_PER_SECOND - 1.0e-3).ceil());
-            whole_substeps(k)
+            whole_substeps(limited_chain_substeps(side, dt))
         }
         Some(grid) if grid.cols.max(grid.rows) <= XPBD_UNPINNED_FLOOR_SIDE => {
             substeps_at_least(cloth, settings, dt, XPBD_UNPINNED_SUBSTEPS_PER_SECOND)
@@ -294,8 +301,7 @@ fn substeps_at_least(cloth: &Cloth, settings: &SolverSettings, dt: f32, per_seco
     let h = stable_substep(cloth, settings);
     let mut k = (dt / h).ceil();
     if chains_lengthen(cloth, settings) {
-        // A thousandth below: 1/60 s at 960 a second is 16, not 17.
-        k = k.max((dt * per_second - 1.0e-3).ceil());
+        k = k.max(substeps_at_rate(dt, per_second));
     }
     whole_substeps(k)
 }
