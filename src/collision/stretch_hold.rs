@@ -263,6 +263,31 @@ impl CollisionStage {
     }
 }
 
+/// Whether some stretch spring of `springs` at positions `x` is over
+/// `factor` times its rest length by more than the slack: what this hold
+/// would shorten, over every stretch spring rather than those near an
+/// obstacle (so false means it would shorten none). One pass, no early
+/// exit (the loop stays branch-free).
+pub(crate) fn any_stretch_over_limit(springs: &Springs, x: &[Vector], factor: f32) -> bool {
+    if !factor.is_finite() {
+        return false;
+    }
+    let stretch = springs.range(SpringKind::Stretch);
+    let (a, b, rest) = (
+        &springs.a[stretch.clone()],
+        &springs.b[stretch.clone()],
+        &springs.rest[stretch],
+    );
+    let mut over = false;
+    for ((&a, &b), &rest) in a.iter().zip(b).zip(rest) {
+        let len2 = (x[b as usize] - x[a as usize]).length_squared();
+        // A length that is not a number counts as over: the hold's own
+        // test skips it, but nothing is then known of it.
+        over |= over_limit(len2, rest * factor) || len2.is_nan();
+    }
+    over
+}
+
 /// Whether a spring of squared length `len2` (m²) is over its `limit` (m)
 /// by more than the slack every limit allows (false for a length that is
 /// not a number).
@@ -288,5 +313,38 @@ pub(crate) fn stop_separating(
         let dv = n * (separating / (wa + wb));
         v[a] += dv * wa;
         v[b] -= dv * wb;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloth::ClothBuilder;
+
+    /// The check says what the hold would do: nothing for a cloth at rest
+    /// or with a spring within the slack of its limit, something for one
+    /// a hair past it or with a length that is not a number.
+    #[test]
+    fn a_spring_counts_as_over_its_limit_only_past_the_slack() {
+        let cloth = ClothBuilder::new(4, 4).build().unwrap();
+        let springs = cloth.springs();
+        let mut x = cloth.positions().to_vec();
+        let factor = 1.05;
+        assert!(!any_stretch_over_limit(springs, &x, factor));
+        // The first stretch spring, stretched along itself.
+        let s = springs.range(SpringKind::Stretch).start;
+        let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
+        let rest = springs.rest[s];
+        let along = (x[b] - x[a]).normalize();
+        let xa = x[a];
+        let at = |stretch: f32| xa + along * (rest * stretch);
+        x[b] = at(factor * (1.0 + 0.5 * LIMIT_SLACK));
+        assert!(!any_stretch_over_limit(springs, &x, factor));
+        x[b] = at(factor * (1.0 + 2.0 * LIMIT_SLACK));
+        assert!(any_stretch_over_limit(springs, &x, factor));
+        // No limit: nothing to hold.
+        assert!(!any_stretch_over_limit(springs, &x, f32::INFINITY));
+        x[b] = Vector::splat(f32::NAN);
+        assert!(any_stretch_over_limit(springs, &x, factor));
     }
 }
