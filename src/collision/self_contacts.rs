@@ -7,13 +7,18 @@
 //! hash of the particles ([`SpatialHash`]) gives each triangle the
 //! particles within reach of it, `thickness + margin`. A look costs a pass
 //! over the triangles, so it is taken again only when it may have missed
-//! a pair: at the first substep of a step, and whenever some particle has
-//! moved more than half the margin since the last look, relative to the
-//! particles' mean motion (two particles then cannot have closed in by
-//! more than the margin: a neighbour list with a skin, as in molecular
-//! dynamics). Every substep for a cloth in violent motion, once a step at
-//! rest or in free fall; the triangles of quiet patches ([`Patches`]: a bent
-//! sheet that cannot touch itself) are skipped. Each pair keeps the side
+//! a pair: whenever some particle has moved more than half the margin
+//! since the last look, relative to the particles' mean motion (two
+//! particles then cannot have closed in by more than the margin: a
+//! neighbour list with a skin, as in molecular dynamics), and when the
+//! cloth, its thickness or the margin changed. Every substep for a cloth
+//! in violent motion, seldom for one at rest or in free fall: a look
+//! carries over from step to step (the `stack` at rest looked once a step
+//! before, 5 ms of its frame). Where it looked is solver state
+//! ([`SelfLook`], in a snapshot); the pairs are scratch, found again from
+//! those positions by a solver with fresh scratch, to the same list. The
+//! triangles of quiet patches ([`Patches`]: a bent sheet that cannot touch
+//! itself) are skipped. Each pair keeps the side
 //! of the triangle the particle was on when found. The cloth's border
 //! edges are also paired with the other edges near them, so that two
 //! borders cannot slip past each other.
@@ -32,6 +37,8 @@
 //! (that change and the correction over the substep) from the sliding
 //! part. No velocity is added: the pass never pumps energy. Edge pairs
 //! are kept apart the same way at their closest points.
+
+use serde::{Deserialize, Serialize};
 
 use super::neighbours::MeshNeighbours;
 use super::patches::Patches;
@@ -62,9 +69,22 @@ struct EdgePair {
     side: f32,
 }
 
+/// Where self-collision last looked for pairs: solver state, since when it
+/// looks next depends on it.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct SelfLook {
+    /// The particles' positions (m) at the look.
+    at: Vec<Vector>,
+    /// The layers' thickness and the margin (m) it looked with.
+    thickness: f32,
+    margin: f32,
+    /// Looks so far: which look the scratch's pairs are of.
+    number: u64,
+}
+
 /// The self-collision stage of a cloth's solver: its pairs and scratch.
-/// Nothing in it carries over from one step to the next (the first
-/// substep of every step looks afresh).
+/// The pairs are those of the last look ([`SelfLook`]), found again from
+/// its positions when the scratch is fresh or the cloth changed.
 #[derive(Debug, Default, Clone)]
 pub struct SelfContacts {
     /// The particles by cell, at the last look.
@@ -77,8 +97,9 @@ pub struct SelfContacts {
     pairs: Vec<SelfPair>,
     /// Border edges near other edges, found by the last look.
     edge_pairs: Vec<EdgePair>,
-    /// Positions (m) at the last look, in this step (none before it).
-    at_look: Vec<Vector>,
+    /// Which look the pairs are of ([`SelfLook::number`]) and the cloth's
+    /// revision then (its masses, pins and topology).
+    pairs_of: Option<(u64, u64)>,
     /// How far (m) particles may close in on each other between looks.
     margin: f32,
 }
@@ -256,24 +277,57 @@ pub(crate) struct SelfContactParams {
     pub h: f32,
 }
 
+/// What a step's looks go by: the cloth's `topology` of `particles`, its
+/// `revision` (`Cloth::mass_revision`, which changes with its topology),
+/// the layers' `thickness` and the `margin` (m).
+pub(crate) struct LookBasis<'a> {
+    pub topology: &'a Topology,
+    pub particles: usize,
+    pub revision: u64,
+    pub thickness: f32,
+    pub margin: f32,
+}
+
 impl SelfContacts {
-    /// At the start of a step: the next substep looks afresh, and looks
-    /// reach `margin` metres beyond the thickness.
-    pub(crate) fn begin_step(&mut self, topology: &Topology, n: usize, margin: f32) {
-        self.neighbours.update(topology, n);
-        self.margin = margin.max(1.0e-4);
-        self.at_look.clear();
+    /// At the start of a step: looks reach `margin` metres beyond the
+    /// thickness. The last look carries over unless the cloth's particles,
+    /// the thickness or the margin changed (then the next substep looks);
+    /// if the pairs in scratch are not of it (fresh scratch, a snapshot,
+    /// a changed topology), they are found again at its positions.
+    pub(crate) fn begin_step(
+        &mut self,
+        look: &mut Option<SelfLook>,
+        basis: &LookBasis,
+        team: Team,
+    ) {
+        self.neighbours.update(basis.topology, basis.particles);
+        self.margin = basis.margin.max(1.0e-4);
+        let Some(last) = look.as_ref() else {
+            return;
+        };
+        if last.at.len() != basis.particles
+            || last.thickness.to_bits() != basis.thickness.to_bits()
+            || last.margin.to_bits() != self.margin.to_bits()
+        {
+            *look = None;
+        } else if self.pairs_of != Some((last.number, basis.revision)) {
+            self.find_pairs(&last.at, basis.topology, basis.thickness, team);
+            self.pairs_of = Some((last.number, basis.revision));
+        }
     }
 
     /// True when particles at `x` may have closed in on each other by more
-    /// than the margin since the last look (or this step has not looked):
-    /// some particle moved more than half of it relative to the mean motion.
-    pub(crate) fn due(&self, x: &[Vector]) -> bool {
-        if self.at_look.len() != x.len() {
+    /// than the margin since the `look` (or there is none): some particle
+    /// moved more than half of it relative to the mean motion.
+    pub(crate) fn due(&self, look: &Option<SelfLook>, x: &[Vector]) -> bool {
+        let Some(look) = look else {
+            return true;
+        };
+        if look.at.len() != x.len() {
             return true;
         }
         let n = x.len().max(1) as f32;
-        let moved = x.iter().zip(&self.at_look).map(|(&x, &at)| x - at);
+        let moved = x.iter().zip(&look.at).map(|(&x, &at)| x - at);
         let mean = moved.clone().fold(Vector::ZERO, |s, d| s + d) / n;
         let half = 0.5 * self.margin;
         moved.into_iter().any(|d| {
@@ -283,15 +337,33 @@ impl SelfContacts {
         })
     }
 
+    /// Looks for pairs at positions `x` (the `basis`'s thickness and
+    /// margin) and records the look in `look`.
+    pub(crate) fn find(
+        &mut self,
+        look: &mut Option<SelfLook>,
+        x: &[Vector],
+        basis: &LookBasis,
+        team: Team,
+    ) {
+        self.find_pairs(x, basis.topology, basis.thickness, team);
+        let last = look.get_or_insert_with(SelfLook::default);
+        // The positions' buffer is reused: no allocation once warmed up.
+        last.at.clear();
+        last.at.extend_from_slice(x);
+        last.thickness = basis.thickness;
+        last.margin = self.margin;
+        last.number += 1;
+        self.pairs_of = Some((last.number, basis.revision));
+    }
+
     /// Finds the particles within reach of triangles they are not
     /// neighbours of, at positions `x`: blocks of triangles on the `team`,
     /// their pairs then joined in triangle order (the same list on any
     /// number of threads).
-    pub(crate) fn find(&mut self, x: &[Vector], topology: &Topology, thickness: f32, team: Team) {
+    fn find_pairs(&mut self, x: &[Vector], topology: &Topology, thickness: f32, team: Team) {
         self.pairs.clear();
         self.edge_pairs.clear();
-        self.at_look.resize(x.len(), Vector::ZERO);
-        self.at_look.copy_from_slice(x);
         let triangles = &topology.triangles;
         if triangles.is_empty() {
             return;
@@ -541,25 +613,71 @@ mod tests {
         let cloth = ClothBuilder::new(4, 4).build().unwrap();
         let topology = &*cloth.topology;
         let x = cloth.positions().to_vec();
+        let basis = |thickness: f32| LookBasis {
+            topology,
+            particles: x.len(),
+            revision: cloth.mass_revision,
+            thickness,
+            margin: 0.01,
+        };
         let mut contacts = SelfContacts::default();
-        contacts.begin_step(topology, x.len(), 0.01);
-        assert!(contacts.due(&x), "a step's first substep looks");
-        contacts.find(&x, topology, 0.002, Team::ALONE);
-        assert!(!contacts.due(&x));
+        let mut look = None;
+        contacts.begin_step(&mut look, &basis(0.002), Team::ALONE);
+        assert!(contacts.due(&look, &x), "no look yet");
+        contacts.find(&mut look, &x, &basis(0.002), Team::ALONE);
+        assert!(!contacts.due(&look, &x));
         // The whole cloth falling: no two particles closed in.
         let fell: Vec<Vector> = x.iter().map(|&p| p - Vector::Y * 0.3).collect();
-        assert!(!contacts.due(&fell));
+        assert!(!contacts.due(&look, &fell));
         // One particle of 16 moved 15/16 of its motion relative to the mean.
         let moved = |dy: f32| {
             let mut y = x.clone();
             y[5].y += dy;
             y
         };
-        assert!(!contacts.due(&moved(0.0053)), "4.97 mm relative");
-        assert!(contacts.due(&moved(0.0054)), "5.06 mm relative");
-        assert!(contacts.due(&moved(f32::NAN)), "lost: look again");
-        // Every step looks afresh at its first substep.
-        contacts.begin_step(topology, x.len(), 0.01);
-        assert!(contacts.due(&x));
+        assert!(!contacts.due(&look, &moved(0.0053)), "4.97 mm relative");
+        assert!(contacts.due(&look, &moved(0.0054)), "5.06 mm relative");
+        assert!(contacts.due(&look, &moved(f32::NAN)), "lost: look again");
+        // The look carries over to the next step, unless the thickness
+        // (or the margin, or the particles) changed.
+        contacts.begin_step(&mut look, &basis(0.002), Team::ALONE);
+        assert!(!contacts.due(&look, &x));
+        contacts.begin_step(&mut look, &basis(0.003), Team::ALONE);
+        assert!(look.is_none() && contacts.due(&look, &x));
+    }
+
+    /// Fresh scratch finds the pairs of the last look again, at the
+    /// positions of that look (not the current ones), to the same list.
+    #[test]
+    fn fresh_scratch_finds_the_last_looks_pairs_again() {
+        let cloth = ClothBuilder::new(6, 6).build().unwrap();
+        let topology = &*cloth.topology;
+        // Folded in two along a column, the halves 2 mm apart.
+        let folded: Vec<Vector> = cloth
+            .positions()
+            .iter()
+            .map(|&p| {
+                if p.x > 0.0 {
+                    Vector::new(-p.x, p.y + 0.002, p.z)
+                } else {
+                    p
+                }
+            })
+            .collect();
+        let basis = LookBasis {
+            topology,
+            particles: folded.len(),
+            revision: cloth.mass_revision,
+            thickness: 0.004,
+            margin: 0.004,
+        };
+        let (mut contacts, mut look) = (SelfContacts::default(), None);
+        contacts.begin_step(&mut look, &basis, Team::ALONE);
+        contacts.find(&mut look, &folded, &basis, Team::ALONE);
+        assert!(!contacts.pairs.is_empty(), "the halves are within reach");
+        let mut fresh = SelfContacts::default();
+        fresh.begin_step(&mut look, &basis, Team::ALONE);
+        assert_eq!(fresh.pairs, contacts.pairs);
+        assert_eq!(fresh.edge_pairs, contacts.edge_pairs);
     }
 }

@@ -32,6 +32,11 @@ pub struct StepReport {
     /// substeps (0 without self-collision).
     #[serde(default)]
     pub self_contacts: u32,
+    /// Looks self-collision took for pairs this step (0 without it, or when
+    /// the last look still held: it carries over while no particle moved
+    /// half the margin relative to the others).
+    #[serde(default)]
+    pub self_looks: u32,
     /// Stretch springs that tore at the end of the step (0 unless the
     /// material has a tear strain); see [`crate::solver::ClothSolver::tear_events`].
     #[serde(default)]

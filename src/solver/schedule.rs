@@ -37,7 +37,9 @@ use super::substep::Substep;
 use super::substeps::Substeps;
 use super::substeps::{self_collision_substeps, MAX_SELF_SUBSTEP};
 use crate::cloth::{Cloth, Particles, SpringKind};
-use crate::collision::{any_stretch_over_limit, Obstacle, ResolveOptions, SelfContactParams};
+use crate::collision::{
+    any_stretch_over_limit, LookBasis, Obstacle, ResolveOptions, SelfContactParams,
+};
 use crate::context::StepContext;
 use crate::error::{positive, ClothError};
 use crate::forces::{ForceModel, Masses};
@@ -135,8 +137,14 @@ impl ClothSolver {
             // A margin of the collision thickness: stack 116 → 55 ms a frame
             // against looks timed from the step's speeds (half of it: 70 ms,
             // twice: 80 ms, four times: 209 ms; measured).
-            let margin = cloth.params.thickness;
-            ws.self_contacts.begin_step(&cloth.topology, n, margin);
+            let basis = look_basis(cloth);
+            // Pairs found again for fresh scratch: the same list on one
+            // thread as on several.
+            ws.self_contacts
+                .begin_step(&mut self.state.self_look, &basis, Team::ALONE);
+        } else {
+            // Nothing to carry (and nothing stale in a snapshot).
+            self.state.self_look = None;
         }
 
         // Below a few thousand particles the loops are too short to share.
@@ -292,8 +300,17 @@ impl ClothSolver {
             if cloth.params.self_collision {
                 let (selfc, topology) = (&mut ws.self_contacts, &*cloth.topology);
                 let thickness = layer;
-                if selfc.due(&cloth.particles.x) {
-                    selfc.find(&cloth.particles.x, topology, thickness, team);
+                let look = &mut self.state.self_look;
+                if selfc.due(look, &cloth.particles.x) {
+                    let basis = LookBasis {
+                        topology,
+                        particles: cloth.particles.x.len(),
+                        revision: cloth.mass_revision,
+                        thickness,
+                        margin: cloth.params.thickness,
+                    };
+                    selfc.find(look, &cloth.particles.x, &basis, team);
+                    report.self_looks += 1;
                 }
                 report.self_contacts += selfc.resolve(
                     &mut cloth.particles,
@@ -394,6 +411,18 @@ impl ClothSolver {
             watch.lap(&mut times.contacts);
         }
         Ok(report)
+    }
+}
+
+/// What self-collision's looks for pairs go by this step: the layers'
+/// thickness, and a margin of the collision thickness.
+fn look_basis(cloth: &Cloth) -> LookBasis<'_> {
+    LookBasis {
+        topology: &cloth.topology,
+        particles: cloth.particle_count(),
+        revision: cloth.mass_revision,
+        thickness: cloth.self_thickness(),
+        margin: cloth.params.thickness,
     }
 }
 

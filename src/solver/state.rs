@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::global_matrix::FactorHistory;
 use super::sleep::SleepState;
+use crate::collision::SelfLook;
 use crate::math::Vector;
 
 /// What a solver carries from one substep to the next.
@@ -24,4 +25,8 @@ pub struct SolverState {
     /// Whether the cloth sleeps (with `SolverSettings::sleep`).
     #[serde(default, skip_serializing_if = "SleepState::is_awake")]
     pub(crate) sleep: SleepState,
+    /// Where self-collision last looked for pairs (a look carries over
+    /// from step to step). None until it looks.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) self_look: Option<SelfLook>,
 }
