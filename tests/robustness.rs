@@ -49,6 +49,27 @@ fn a_snapshot_restores_exactly_and_resumes_bit_for_bit() {
     }
 }
 
+/// A snapshot resumes bit for bit where the solver carries more between
+/// steps than the drape asks of it: the box's still cube, whose contacts
+/// the small-steps solver holds as planes (found afresh at a step's first
+/// substep: before, a restored solver had none there and went on to other
+/// bits from the second frame), and the fold's bar, ground and layers
+/// (self-collision's last look, which carries over from step to step).
+#[test]
+fn a_snapshot_resumes_bit_for_bit_among_edges_and_self_contact() {
+    for (kind, n, before) in [(SceneKind::Box, 16, 40), (SceneKind::Fold, 24, 100)] {
+        let scene = Scene::build(
+            kind,
+            &SceneOptions {
+                n: Some(n),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        snapshot_resumes(scene, before, 10, kind.name());
+    }
+}
+
 #[test]
 fn a_snapshot_resumes_bit_for_bit_with_spring_classes_split_across_threads() {
     // N = 96: colour classes large enough for the parallel feature to split them.

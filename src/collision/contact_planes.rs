@@ -54,14 +54,18 @@ const PLANE_SLACK: f32 = 1.0e-5;
 impl CollisionStage {
     /// The contact planes of a substep of `h` seconds for particles at `x`
     /// moving at `v` (their start), into `planes`: one for each free
-    /// particle whose nearest obstacle at the last resolution is still and
-    /// has edges ([`Obstacle::is_still`], [`Obstacle::has_edges`]), and
-    /// may be reached within the substep (its gap over the thickness under
-    /// twice the particle's motion at `v` plus the thickness). The plane is
-    /// the one the particle pass found, unless the particle has moved inside
-    /// it since, or the substep is a step's `first` (the obstacles handed
-    /// to this step need not be the last step's): then it is looked up
-    /// afresh where the particle is.
+    /// particle whose nearest obstacle is still and has edges
+    /// ([`Obstacle::is_still`], [`Obstacle::has_edges`]), and may be
+    /// reached within the substep (its gap over the thickness under twice
+    /// the particle's motion at `v` plus the thickness). The nearest
+    /// obstacle and its plane are those the particle pass found at the last
+    /// resolution, unless the particle has moved inside the plane since:
+    /// then the plane is looked up afresh where the particle is. At a
+    /// step's `first` substep both are found afresh among the particle's
+    /// candidates of the step's cache: the obstacles handed to this step
+    /// need not be the last step's, and what the last step's pass found is
+    /// scratch, which a solver restored from a snapshot does not have (it
+    /// had no planes at that substep, and went on to other bits).
     pub(crate) fn contact_planes(
         &self,
         (x, v, inv_mass): (&[Vector], &[Vector], &[f32]),
@@ -74,7 +78,14 @@ impl CollisionStage {
         planes
             .held
             .extend(obstacles.iter().map(|o| o.has_edges() && o.is_still()));
-        if !planes.held.iter().any(|&held| held) || self.nearest.len() != v.len() {
+        if !planes.held.iter().any(|&held| held) {
+            return;
+        }
+        if first {
+            self.first_contact_planes((x, v, inv_mass), obstacles, (h, thickness), planes);
+            return;
+        }
+        if self.nearest.len() != v.len() {
             return;
         }
         for i in 0..v.len() {
@@ -90,9 +101,8 @@ impl CollisionStage {
             let (mut normal, mut offset) = (self.normal[i], self.surface[i] + thickness);
             // Moved inside the plane since the particle pass (by the edge
             // pass or the stretch hold, perhaps round an edge onto another
-            // face), or another step's obstacle: its plane where the
-            // particle is now.
-            if first || normal.dot(x[i]) < offset - PLANE_SLACK {
+            // face): its plane where the particle is now.
+            if normal.dot(x[i]) < offset - PLANE_SLACK {
                 let Some(hit) = self.tracks.contact(obstacles, o, x[i]) else {
                     continue;
                 };
@@ -101,11 +111,61 @@ impl CollisionStage {
                 }
                 (normal, offset) = (hit.normal, hit.normal.dot(hit.point) + thickness);
             }
-            planes.particle.push(i as u32);
-            planes.normal.push(normal);
-            planes.offset.push(offset);
-            planes.depth.push(0.0);
-            planes.friction.push(obstacles[o].friction);
+            planes.push(i, (normal, offset), obstacles[o].friction);
         }
+    }
+
+    /// [`Self::contact_planes`] at a step's first substep: each free
+    /// particle's nearest obstacle among its cached candidates, where it
+    /// is, from the step's state alone.
+    fn first_contact_planes(
+        &self,
+        (x, v, inv_mass): (&[Vector], &[Vector], &[f32]),
+        obstacles: &[Obstacle],
+        (h, thickness): (f32, f32),
+        planes: &mut ContactPlanes,
+    ) {
+        for i in 0..v.len() {
+            if inv_mass[i] == 0.0 {
+                continue;
+            }
+            let reach = thickness + 2.0 * v[i].length() * h;
+            let mut nearest = None;
+            for &o in self.tracks.cached_of(i) {
+                let o = o as usize;
+                // Further than a plane would be taken at: not its nearest,
+                // or no plane either way.
+                if self.tracks.surely_beyond(o, x[i], thickness + reach) {
+                    continue;
+                }
+                let Some(hit) = self.tracks.contact(obstacles, o, x[i]) else {
+                    continue;
+                };
+                if nearest.is_none_or(|(_, d, _)| hit.signed_distance < d) {
+                    nearest = Some((o, hit.signed_distance, hit));
+                }
+            }
+            let Some((o, distance, hit)) = nearest else {
+                continue;
+            };
+            if !planes.held.get(o).copied().unwrap_or(false) || distance - thickness > reach {
+                continue;
+            }
+            let plane = (hit.normal, hit.normal.dot(hit.point) + thickness);
+            planes.push(i, plane, obstacles[o].friction);
+        }
+    }
+}
+
+impl ContactPlanes {
+    /// Adds particle `i`'s plane `(normal, offset)` with the obstacle's
+    /// `friction`.
+    #[inline]
+    fn push(&mut self, i: usize, (normal, offset): (Vector, f32), friction: f32) {
+        self.particle.push(i as u32);
+        self.normal.push(normal);
+        self.offset.push(offset);
+        self.depth.push(0.0);
+        self.friction.push(friction);
     }
 }
