@@ -53,11 +53,18 @@ fn a_snapshot_restores_exactly_and_resumes_bit_for_bit() {
 /// steps than the drape asks of it: the box's still cube, whose contacts
 /// the small-steps solver holds as planes (found afresh at a step's first
 /// substep: before, a restored solver had none there and went on to other
-/// bits from the second frame), and the fold's bar, ground and layers
-/// (self-collision's last look, which carries over from step to step).
+/// bits from the first frame), the fold's bar, ground and layers and the
+/// stack's three cloths (self-collision's last look, which carries over
+/// from step to step), and the flag's gusts.
 #[test]
 fn a_snapshot_resumes_bit_for_bit_among_edges_and_self_contact() {
-    for (kind, n, before) in [(SceneKind::Box, 16, 40), (SceneKind::Fold, 24, 100)] {
+    let scenes = [
+        (SceneKind::Box, 16, 40),
+        (SceneKind::Fold, 24, 100),
+        (SceneKind::Stack, 12, 60),
+        (SceneKind::Flag, 16, 30),
+    ];
+    for (kind, n, before) in scenes {
         let scene = Scene::build(
             kind,
             &SceneOptions {
