@@ -148,7 +148,16 @@ impl CollisionStage {
             let Some((o, distance, hit)) = nearest else {
                 continue;
             };
-            if !planes.held.get(o).copied().unwrap_or(false) || distance - thickness > reach {
+            // Within the thickness already (a cloth laid on the obstacle
+            // by hand; the last step's pass leaves none there): a plane
+            // would push it out over one substep, at the speed of the push
+            // over the substep (a sheet laid on a ramp took off). The
+            // collision stage's pass takes it out without.
+            let inside = distance < thickness - PLANE_SLACK;
+            if !planes.held.get(o).copied().unwrap_or(false)
+                || distance - thickness > reach
+                || inside
+            {
                 continue;
             }
             let plane = (hit.normal, hit.normal.dot(hit.point) + thickness);
