@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::integrator::Integrator;
 use super::report::SolverCounters;
 use super::settings::SolverSettings;
-use super::stability::stable_substeps;
+use super::stability::{chains_lengthen, self_closing_substeps, stable_substeps};
 use super::state::SolverState;
 use super::substeps::{self_collision_substeps, Substeps};
 use super::tearing::TearEvent;
@@ -130,8 +130,19 @@ pub(super) fn substeps_with(settings: &SolverSettings, cloth: &Cloth, dt: f32) -
         Substeps::Auto => {
             if cloth.params.self_collision {
                 // Layers cross at the chains' longer substeps (the fold's
-                // 71 self-intersections at 16 substeps, none at 55).
-                let stable = stable_substeps(cloth, &unshortened(settings), dt);
+                // 71 self-intersections at 16 substeps, none at 55): the
+                // sweeps' count, or where the chains apply, as many as
+                // keep a layer closing at `SELF_CLOSING_SPEED` within the
+                // thickness a substep (fewer; stability.rs says why).
+                let sweeps = stable_substeps(cloth, &unshortened(settings), dt);
+                let stable = if chains_lengthen(cloth, settings) {
+                    let closing = self_closing_substeps(cloth.self_thickness(), dt);
+                    stable_substeps(cloth, settings, dt)
+                        .max(closing)
+                        .min(sweeps)
+                } else {
+                    sweeps
+                };
                 stable.max(self_collision_substeps(dt))
             } else {
                 stable_substeps(cloth, settings, dt)
