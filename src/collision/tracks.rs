@@ -277,8 +277,6 @@ impl ObstacleTracks {
         self.anchors[0].is_empty()
     }
 
-    /// True when particle `i` has candidates in the step's cache: while it
-    /// stays within the margin, it can come near no obstacle otherwise.
     /// The candidate obstacles cached for particle `i` this step (none when
     /// the cache does not cover it).
     pub(super) fn cached_of(&self, i: usize) -> &[u32] {
@@ -288,6 +286,8 @@ impl ObstacleTracks {
         }
     }
 
+    /// True when particle `i` has candidates in the step's cache: while it
+    /// stays within the margin, it can come near no obstacle otherwise.
     pub(super) fn has_cached(&self, i: usize) -> bool {
         self.cache_start.get(i..i + 2).is_some_and(|c| c[0] != c[1])
     }

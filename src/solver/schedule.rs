@@ -133,15 +133,24 @@ impl ClothSolver {
         if cloth.params.tethers {
             ws.tethers.update(cloth);
         }
+        // The layers' thickness, once a step (it reads every stretch
+        // spring), and only for a cloth that needs it.
+        let layer = if cloth.params.self_collision {
+            cloth.self_thickness()
+        } else {
+            0.0
+        };
         if cloth.params.self_collision {
             // A margin of the collision thickness: stack 116 → 55 ms a frame
             // against looks timed from the step's speeds (half of it: 70 ms,
             // twice: 80 ms, four times: 209 ms; measured).
-            let basis = look_basis(cloth);
             // Pairs found again for fresh scratch: the same list on one
             // thread as on several.
-            ws.self_contacts
-                .begin_step(&mut self.state.self_look, &basis, Team::ALONE);
+            ws.self_contacts.begin_step(
+                &mut self.state.self_look,
+                &look_basis(cloth, layer),
+                Team::ALONE,
+            );
         } else {
             // Nothing to carry (and nothing stale in a snapshot).
             self.state.self_look = None;
@@ -150,7 +159,7 @@ impl ClothSolver {
         // Below a few thousand particles the loops are too short to share.
         let threads = self.settings.parallel && n >= TEAM_MIN_PARTICLES;
         let mut report = with_team(threads, |team| {
-            self.substeps(cloth, obstacles, (dt, k, longest_rest), team)
+            self.substeps(cloth, obstacles, (dt, k, longest_rest, layer), team)
         })?;
         // Divergence check.
         if !is_sane(cloth) {
@@ -217,13 +226,11 @@ impl ClothSolver {
         &mut self,
         cloth: &mut Cloth,
         obstacles: &[Obstacle],
-        (dt, k, longest_rest): (f32, u32, f32),
+        (dt, k, longest_rest, layer): (f32, u32, f32, f32),
         team: Team,
     ) -> Result<StepReport, ClothError> {
         let h = dt / k as f32;
         let edges = self.settings.edge_collisions;
-        // Once a step: it reads every stretch spring.
-        let layer = cloth.self_thickness();
         let ws = &mut self.workspace;
         let mut report = StepReport {
             substeps: k,
@@ -302,13 +309,7 @@ impl ClothSolver {
                 let thickness = layer;
                 let look = &mut self.state.self_look;
                 if selfc.due(look, &cloth.particles.x) {
-                    let basis = LookBasis {
-                        topology,
-                        particles: cloth.particles.x.len(),
-                        revision: cloth.mass_revision,
-                        thickness,
-                        margin: cloth.params.thickness,
-                    };
+                    let basis = look_basis(cloth, thickness);
                     selfc.find(look, &cloth.particles.x, &basis, team);
                     report.self_looks += 1;
                 }
@@ -415,13 +416,14 @@ impl ClothSolver {
 }
 
 /// What self-collision's looks for pairs go by this step: the layers'
-/// thickness, and a margin of the collision thickness.
-fn look_basis(cloth: &Cloth) -> LookBasis<'_> {
+/// `thickness` (`Cloth::self_thickness`, m), and a margin of the
+/// collision thickness.
+fn look_basis(cloth: &Cloth, thickness: f32) -> LookBasis<'_> {
     LookBasis {
         topology: &cloth.topology,
         particles: cloth.particle_count(),
         revision: cloth.mass_revision,
-        thickness: cloth.self_thickness(),
+        thickness,
         margin: cloth.params.thickness,
     }
 }

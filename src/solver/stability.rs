@@ -306,8 +306,6 @@ fn substeps_at_least(cloth: &Cloth, settings: &SolverSettings, dt: f32, per_seco
     whole_substeps(k)
 }
 
-/// A substep count from a whole number `k` of them: 1 to a million, and 1
-/// for one that is not finite.
 /// How fast (m/s) two layers of a cloth with self-collision may close in
 /// on each other for the automatic substeps of the small-steps solver with
 /// its chain solves: a substep moves such a layer by at most the layers'
@@ -328,6 +326,8 @@ pub(crate) fn self_closing_substeps(thickness: f32, dt: f32) -> u32 {
     whole_substeps(substeps_at_rate(dt, SELF_CLOSING_SPEED / thickness))
 }
 
+/// A substep count from a whole number `k` of them: 1 to a million, and 1
+/// for one that is not finite.
 fn whole_substeps(k: f32) -> u32 {
     if k.is_finite() {
         k.clamp(1.0, 1.0e6) as u32
