@@ -136,11 +136,7 @@ impl ClothSolver {
         // The layers' thickness, once a step (it reads every stretch
         // spring), and only for a cloth that needs it.
         let layer = if cloth.params.self_collision {
-            cloth.self_thickness()
-        } else {
-            0.0
-        };
-        if cloth.params.self_collision {
+            let layer = cloth.self_thickness();
             // A margin of the collision thickness: stack 116 → 55 ms a frame
             // against looks timed from the step's speeds (half of it: 70 ms,
             // twice: 80 ms, four times: 209 ms; measured).
@@ -151,10 +147,12 @@ impl ClothSolver {
                 &look_basis(cloth, layer),
                 Team::ALONE,
             );
+            layer
         } else {
             // Nothing to carry (and nothing stale in a snapshot).
             self.state.self_look = None;
-        }
+            0.0
+        };
 
         // Below a few thousand particles the loops are too short to share.
         let threads = self.settings.parallel && n >= TEAM_MIN_PARTICLES;
@@ -371,10 +369,7 @@ impl ClothSolver {
             // its slack as the stage's hold would: the drape N = 128 ran
             // the pass in 26 of 40 steps for nothing, 0.4–0.6 ms a frame.
             let limit = cloth.material.stretch_limit_factor();
-            let within = |x: &[Vector]| {
-                outcome.stretch_room.is_some()
-                    || !any_stretch_over_limit(&cloth.topology.springs, x, limit)
-            };
+            let springs = &cloth.topology.springs;
             let settled = held
                 && (!edges
                     || LaneContacts::springs_stay_out(
@@ -382,7 +377,8 @@ impl ClothSolver {
                         2.0 * limit * longest_rest,
                         cloth.params.thickness,
                     ))
-                && within(&cloth.particles.x);
+                && (outcome.stretch_room.is_some()
+                    || !any_stretch_over_limit(springs, &cloth.particles.x, limit));
             if settled {
                 report.contacts += outcome.touching;
                 continue;

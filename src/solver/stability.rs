@@ -318,7 +318,7 @@ fn substeps_at_least(cloth: &Cloth, settings: &SolverSettings, dt: f32, per_seco
 /// cotton, silk and denim (silk 26 in some frame), 380 with 24. The
 /// sweeps' own count, taken before, rose with the stiffness (leather 106
 /// and canvas 124 at N = 48), which keeps no layer apart.
-pub(crate) const SELF_CLOSING_SPEED: f32 = 6.4;
+const SELF_CLOSING_SPEED: f32 = 6.4;
 
 /// The substeps of a frame of `dt` seconds in which a layer closing at
 /// [`SELF_CLOSING_SPEED`] moves at most `thickness` metres each.
