@@ -374,7 +374,11 @@ fn xpbd_takes_12_substeps_free_among_still_balls_32_near_a_still_cuboid_and_the_
         chains,
         "a pinned cloth"
     );
-    assert_eq!(among(std::slice::from_ref(&far)), chains, "out of reach");
+    assert_eq!(
+        among(std::slice::from_ref(&far)),
+        12,
+        "a still cuboid out of reach: as none, the lanes would hold it"
+    );
     assert_eq!(among(std::slice::from_ref(&still)), 32);
     assert_eq!(among(&[still.clone(), moving.clone()]), sweeps);
     assert_eq!(among(std::slice::from_ref(&moving)), sweeps);
@@ -405,9 +409,9 @@ fn cloth_on_a_still_slope_sticks_by_friction_and_slides_without_it() {
             sim.set_position(i, p).unwrap();
         }
         let before = sim.centroid();
-        for _ in 0..60 {
+        for f in 0..60 {
             let report = sim.step(1.0 / 60.0, std::slice::from_ref(&ramp)).unwrap();
-            assert_eq!(report.substeps, 32);
+            assert_eq!(report.substeps, 32, "frame {f}, friction {friction}");
         }
         assert!(sim.max_strain(SpringKind::Stretch) < 0.05);
         (sim.centroid() - before).dot(down)

@@ -1,5 +1,6 @@
-//! Contacts with still balls and half-spaces (a ball on a stand, a floor)
-//! held inside the small-steps solver's substeps, in its grid lanes. The
+//! Contacts with still balls, half-spaces and cuboids (a ball on a stand,
+//! a floor, a table) held inside the small-steps solver's substeps, in its
+//! grid lanes. The
 //! collision stage after a substep visits every particle near an obstacle
 //! through its general pass (candidates, exact contact, tracing, friction,
 //! impulses): at N = 128 on the `drape`'s ball that was a third of the
@@ -20,7 +21,15 @@
 //! point of the surface: against a still shape over a substep's motion (a
 //! few millimetres) that is the side it came in by; a ball must be several
 //! times larger than the substep's fastest motion ([`BALL_MOTIONS`]), or
-//! the collision stage, which traces paths, keeps it.
+//! the collision stage, which traces paths, keeps it. A cuboid holds each
+//! lane on the tangent plane of the cuboid (rounded by the thickness) at
+//! the point nearest to where the lane started the substep, found once a
+//! substep ([`LaneContacts::take_planes`]), as the collision stage's
+//! contact planes did: a lane pulled over an edge stays on the face it was
+//! on. The lanes do not see the springs between particles, which may cut
+//! a cuboid's edge: there the collision stage's edge pass still runs every
+//! second substep (`xpbd::CUBOID_STAGE_EVERY`). The `box` went from 9.1 to
+//! 6.5 ms a frame so, its peak stretch from 5.30% to 4.78%.
 
 use crate::collision::{chords_clear_ball, Obstacle};
 use crate::math::{simd_available, Vector};
@@ -47,6 +56,37 @@ enum StillShape {
     /// A half-space: outward unit normal, and the offset (m) of its
     /// boundary moved out by the thickness (`n · x = offset` on it).
     Plane { normal: Vector, offset: f32 },
+    /// A cuboid (a table, a box), rounded by the thickness: centre (m),
+    /// its local axes in the world (unit vectors), half extents (m) and
+    /// the thickness (m).
+    Cuboid(StillCuboid),
+}
+
+/// How far within the thickness, as a share of it, a lane may start a
+/// substep and still be put out to the thickness by a cuboid's plane
+/// ([`cuboid_plane`]); one deeper is held where it starts along the normal.
+/// The passes after the lanes' last push (the stretch limit) leave lanes a
+/// hair inside, and held there they sank with each substep's limit: the
+/// `box` peaked at 5.03% so with none, 4.78% with a tenth (a quarter, a
+/// half and the whole thickness the same).
+const SETTLE_SHARE: f32 = 0.1;
+
+/// A still cuboid as the lanes take it ([`StillShape::Cuboid`]): a lane
+/// is held by the tangent plane of the rounded cuboid at the point nearest
+/// to where it started the substep, as the collision stage's contact
+/// planes hold it, when it started within `reach` (m) of the cuboid.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct StillCuboid {
+    centre: Vector,
+    axes: [Vector; 3],
+    half: Vector,
+    thickness: f32,
+    reach: f32,
+    /// How far (m) within the thickness a lane may start and still be
+    /// put out to it ([`cuboid_plane`]).
+    settle: f32,
+    /// Which of the lanes' plane records is this cuboid's.
+    slot: usize,
 }
 
 /// The still smooth obstacles of a substep and what the lanes passes
@@ -58,32 +98,46 @@ pub(crate) struct LaneContacts {
     friction: Vec<f32>,
     depth: Vec<f32>,
     touch: Vec<u32>,
+    /// Per cuboid, per lane: the plane that holds the lane this substep
+    /// (unit normal x, y, z and offset, m; an offset of −∞ for none), in
+    /// the cuboid's slot of `lanes` entries ([`Self::take_planes`]).
+    planes: [Vec<f32>; 4],
+    /// Lanes of the substep.
+    lanes: usize,
 }
 
 impl LaneContacts {
     /// Whether every obstacle is one the lanes may hold, whatever the
     /// motion (none counts: nothing to hold): still (no rapier body, no
-    /// velocity), a ball or a half-space.
+    /// velocity), a ball, a half-space or a cuboid.
     pub fn may_hold(obstacles: &[Obstacle]) -> bool {
         obstacles.iter().all(|o| {
             let shape = &o.shape;
-            o.is_still() && (shape.as_ball().is_some() || shape.as_halfspace().is_some())
+            o.is_still()
+                && (shape.as_ball().is_some()
+                    || shape.as_halfspace().is_some()
+                    || shape.as_cuboid().is_some())
         })
     }
 
     /// Whether the lanes hold the contacts of every one of `obstacles`
     /// (and there is one) for a substep in which no particle moves
     /// further than `motion` (m): each is still (no rapier body, no
-    /// velocity) and a half-space, or a ball of a radius over
-    /// [`BALL_MOTIONS`] times `motion`. The collision stage then need not
-    /// run after a substep but the last.
+    /// velocity) and a half-space, or a ball of a radius or a cuboid of
+    /// half extents over [`BALL_MOTIONS`] times `motion` (a particle is
+    /// put back through the nearest face, which must be the one it came
+    /// in by). The collision stage then need not run after a substep but
+    /// the last.
     pub fn holds(obstacles: &[Obstacle], motion: f32) -> bool {
+        let deep = BALL_MOTIONS * motion;
         !obstacles.is_empty()
             && Self::may_hold(obstacles)
             && obstacles.iter().all(|o| {
-                o.shape
-                    .as_ball()
-                    .is_none_or(|ball| ball.radius > BALL_MOTIONS * motion)
+                let shape = &o.shape;
+                shape.as_ball().is_none_or(|ball| ball.radius > deep)
+                    && shape
+                        .as_cuboid()
+                        .is_none_or(|c| c.half_extents.min_element() > deep)
             })
     }
 
@@ -103,21 +157,38 @@ impl LaneContacts {
             return false;
         }
         for o in obstacles {
-            let shape = match (o.shape.as_ball(), o.shape.as_halfspace()) {
-                (Some(ball), _) => StillShape::Ball {
+            let shape = o.shape.as_cuboid();
+            let shape = match (o.shape.as_ball(), o.shape.as_halfspace(), shape) {
+                (Some(ball), _, _) => StillShape::Ball {
                     centre: o.pose.translation,
                     reach: ball.radius + thickness,
                 },
-                (None, Some(half)) => {
+                (None, Some(half), _) => {
                     let normal = (o.pose.rotation * half.normal).normalize();
                     StillShape::Plane {
                         normal,
                         offset: normal.dot(o.pose.translation) + thickness,
                     }
                 }
-                // `holds` took only balls and half-spaces; should it take
-                // another shape one day, this one is not held.
-                (None, None) => {
+                (None, None, Some(cuboid)) => StillShape::Cuboid(StillCuboid {
+                    slot: self
+                        .shapes
+                        .iter()
+                        .filter(|s| matches!(s, StillShape::Cuboid(_)))
+                        .count(),
+                    centre: o.pose.translation,
+                    axes: [Vector::X, Vector::Y, Vector::Z]
+                        .map(|axis| (o.pose.rotation * axis).normalize()),
+                    half: cuboid.half_extents,
+                    thickness,
+                    // As the collision stage's contact planes: within twice
+                    // the thickness and twice the substep's motion.
+                    reach: 2.0 * (thickness + motion),
+                    settle: SETTLE_SHARE * thickness,
+                }),
+                // `holds` took only balls, half-spaces and cuboids; should
+                // it take another shape one day, this one is not held.
+                (None, None, None) => {
                     self.shapes.clear();
                     self.friction.clear();
                     return false;
@@ -130,7 +201,59 @@ impl LaneContacts {
         self.depth.resize(n, 0.0);
         self.touch.clear();
         self.touch.resize(n, 0);
+        self.lanes = n;
+        let slots = self
+            .shapes
+            .iter()
+            .filter(|s| matches!(s, StillShape::Cuboid(_)))
+            .count();
+        for record in &mut self.planes {
+            record.clear();
+            record.resize(slots * n, 0.0);
+        }
         true
+    }
+
+    /// Each cuboid's plane for every lane, from where the lanes start the
+    /// substep (`lanes`' start positions, m): the tangent plane of the
+    /// rounded cuboid at the point nearest to the start ([`cuboid_plane`]).
+    /// Once a substep, after [`Self::begin`] and before the passes.
+    pub fn take_planes(&mut self, lanes: &mut Lanes, team: Team) {
+        let n = self.lanes;
+        let [_, _, _, sx, sy, sz, _] = lanes.disjoint();
+        if sx.len() != n {
+            return;
+        }
+        let simd = simd_available();
+        for shape in &self.shapes {
+            let StillShape::Cuboid(cuboid) = *shape else {
+                continue;
+            };
+            let slot = cuboid.slot * n..(cuboid.slot + 1) * n;
+            let [nx, ny, nz, offset] = self
+                .planes
+                .each_mut()
+                .map(|r| Disjoint::new(&mut r[slot.clone()]));
+            team.largest_over_chunks((n, CHUNK), |range| {
+                // SAFETY: chunks are disjoint ranges of lanes; the start
+                // positions are only read.
+                let (start, mut out) = unsafe {
+                    (
+                        [sx, sy, sz].map(|a| &*a.range(range.clone())),
+                        [nx, ny, nz, offset].map(|a| a.range(range.clone())),
+                    )
+                };
+                planes_of(&cuboid, start, &mut out, simd);
+                0.0
+            });
+        }
+    }
+
+    /// Whether the lanes hold a cuboid this substep.
+    pub fn holds_cuboid(&self) -> bool {
+        self.shapes
+            .iter()
+            .any(|s| matches!(s, StillShape::Cuboid(_)))
     }
 
     /// Whether there is anything to hold this substep.
@@ -199,6 +322,8 @@ impl LaneContacts {
         let law = Law {
             shapes: &self.shapes,
             friction: friction.then_some(&self.friction[..]),
+            planes: self.planes.each_ref().map(|r| &r[..]),
+            lanes: self.lanes,
         };
         let simd = simd_available();
         team.largest_over_chunks((lx.len(), CHUNK), |range| {
@@ -208,6 +333,7 @@ impl LaneContacts {
                 let [x, y, z, sx, sy, sz, w] =
                     [lx, ly, lz, sx, sy, sz, lw].map(|a| a.range(range.clone()));
                 Chunk {
+                    first: range.start,
                     x,
                     y,
                     z,
@@ -227,11 +353,26 @@ impl LaneContacts {
 struct Law<'a> {
     shapes: &'a [StillShape],
     friction: Option<&'a [f32]>,
+    /// The cuboids' planes ([`LaneContacts::planes`]) and the lanes of a slot.
+    planes: [&'a [f32]; 4],
+    lanes: usize,
+}
+
+impl Law<'_> {
+    /// The plane (normal, offset) of lane `i` in `slot`.
+    #[inline(always)]
+    fn plane(&self, slot: usize, i: usize) -> ([f32; 3], f32) {
+        let at = slot * self.lanes + i;
+        let [x, y, z, offset] = self.planes;
+        ([x[at], y[at], z[at]], offset[at])
+    }
 }
 
 /// A chunk of lanes: positions now and at the substep's start (m),
 /// inverse masses (1/kg), and the record of the pushes.
 struct Chunk<'a> {
+    /// The index of its first lane among all.
+    first: usize,
     x: &'a mut [f32],
     y: &'a mut [f32],
     z: &'a mut [f32],
@@ -257,6 +398,7 @@ impl<'a> Chunk<'a> {
     #[cfg(target_arch = "x86_64")]
     fn from(self, start: usize) -> Chunk<'a> {
         Chunk {
+            first: self.first + start,
             x: &mut self.x[start..],
             y: &mut self.y[start..],
             z: &mut self.z[start..],
@@ -376,6 +518,35 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
                 inside = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(gap, zero), free);
                 push = _mm256_and_ps(inside, gap);
             }
+            StillShape::Cuboid(cuboid) => {
+                // This lane's plane, taken at the substep's start.
+                let at = cuboid.slot * law.lanes + c.first + k;
+                let [px, py, pz, po] = law.planes;
+                assert!(at + W <= po.len() && [px.len(), py.len(), pz.len()] == [po.len(); 3]);
+                let m = [px, py, pz].map(|a| _mm256_loadu_ps(a.as_ptr().add(at)));
+                let offset = _mm256_loadu_ps(po.as_ptr().add(at));
+                let gap = _mm256_sub_ps(
+                    offset,
+                    _mm256_add_ps(
+                        _mm256_add_ps(_mm256_mul_ps(m[0], p[0]), _mm256_mul_ps(m[1], p[1])),
+                        _mm256_mul_ps(m[2], p[2]),
+                    ),
+                );
+                let behind = _mm256_cmp_ps::<_CMP_GT_OQ>(gap, zero);
+                // No lane behind its plane nor last pushed by it: as for
+                // the ball.
+                let its = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                    _mm256_castps_si256(touch),
+                    _mm256_castps_si256(mark),
+                ));
+                if _mm256_movemask_ps(_mm256_or_ps(behind, its)) == 0 {
+                    continue;
+                }
+                n = m;
+                to = [0, 1, 2].map(|a| _mm256_add_ps(p[a], _mm256_mul_ps(m[a], gap)));
+                inside = _mm256_and_ps(behind, free);
+                push = _mm256_and_ps(inside, gap);
+            }
         }
         let coefficient = _mm256_set1_ps(law.friction.map_or(0.0, |f| f[o]));
         p = [0, 1, 2].map(|a| _mm256_blendv_ps(p[a], to[a], inside));
@@ -435,6 +606,131 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
     _mm256_storeu_si256(touch_at, _mm256_castps_si256(touch));
 }
 
+/// [`planes_of`] for every whole eight lanes, in AVX2; returns how many
+/// lanes it took (the rest are left to the portable pass).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn planes_avx2(
+    cuboid: &StillCuboid,
+    start: [&[f32]; 3],
+    out: &mut [&mut [f32]; 4],
+) -> usize {
+    use std::arch::x86_64::*;
+    let n = start[0].len();
+    assert!(start.iter().all(|s| s.len() == n) && out.iter().all(|o| o.len() == n));
+    let mut k = 0;
+    while k + W <= n {
+        // SAFETY: lanes `k..k + 8` are within every array (asserted).
+        let s = start.map(|a| _mm256_loadu_ps(a.as_ptr().add(k)));
+        let (normal, offset) = cuboid_plane_avx2(cuboid, s);
+        for a in 0..3 {
+            _mm256_storeu_ps(out[a].as_mut_ptr().add(k), normal[a]);
+        }
+        _mm256_storeu_ps(out[3].as_mut_ptr().add(k), offset);
+        k += W;
+    }
+    k
+}
+
+/// [`cuboid_plane`] for eight lanes that start at `start`, in AVX2
+/// registers: the same operations in the same order, without fused
+/// multiply-add, so the same bits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn cuboid_plane_avx2(
+    cuboid: &StillCuboid,
+    start: [std::arch::x86_64::__m256; 3],
+) -> ([std::arch::x86_64::__m256; 3], std::arch::x86_64::__m256) {
+    use std::arch::x86_64::*;
+    let zero = _mm256_setzero_ps();
+    let one = _mm256_set1_ps(1.0);
+    let sign_bit = _mm256_set1_ps(-0.0);
+    let centre = [cuboid.centre.x, cuboid.centre.y, cuboid.centre.z].map(|c| _mm256_set1_ps(c));
+    let half = [cuboid.half.x, cuboid.half.y, cuboid.half.z].map(|h| _mm256_set1_ps(h));
+    let t = _mm256_set1_ps(cuboid.thickness);
+    let d = [0, 1, 2].map(|c| _mm256_sub_ps(start[c], centre[c]));
+    let axes = cuboid
+        .axes
+        .map(|a| [a.x, a.y, a.z].map(|v| _mm256_set1_ps(v)));
+    let local = axes.map(|axis| {
+        _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(axis[0], d[0]), _mm256_mul_ps(axis[1], d[1])),
+            _mm256_mul_ps(axis[2], d[2]),
+        )
+    });
+    let abs = local.map(|l| _mm256_andnot_ps(sign_bit, l));
+    let sign = local.map(|l| _mm256_or_ps(_mm256_and_ps(l, sign_bit), one));
+    let beyond = [0, 1, 2].map(|a| _mm256_sub_ps(abs[a], half[a]));
+    let positive = beyond.map(|b| _mm256_cmp_ps::<_CMP_GT_OQ>(b, zero));
+    let over = [0, 1, 2].map(|a| _mm256_and_ps(positive[a], beyond[a]));
+    let dist2 = _mm256_add_ps(
+        _mm256_add_ps(
+            _mm256_mul_ps(over[0], over[0]),
+            _mm256_mul_ps(over[1], over[1]),
+        ),
+        _mm256_mul_ps(over[2], over[2]),
+    );
+    let outside = _mm256_cmp_ps::<_CMP_GT_OQ>(dist2, zero);
+    let dist = _mm256_sqrt_ps(dist2);
+    let recip = _mm256_div_ps(one, dist);
+    let scale = _mm256_mul_ps(t, recip);
+    let ge = |a: __m256, b: __m256| _mm256_cmp_ps::<_CMP_GE_OQ>(a, b);
+    let x_face = _mm256_and_ps(ge(beyond[0], beyond[1]), ge(beyond[0], beyond[2]));
+    let y_face = _mm256_andnot_ps(x_face, ge(beyond[1], beyond[2]));
+    let z_face = _mm256_andnot_ps(
+        _mm256_or_ps(x_face, y_face),
+        _mm256_castsi256_ps(_mm256_set1_epi32(-1)),
+    );
+    let face = [x_face, y_face, z_face];
+    let mut delta = [zero; 3];
+    let mut normal_local = [zero; 3];
+    for a in 0..3 {
+        let out_delta = _mm256_and_ps(
+            positive[a],
+            _mm256_sub_ps(
+                _mm256_add_ps(half[a], _mm256_mul_ps(over[a], scale)),
+                abs[a],
+            ),
+        );
+        let face_delta = _mm256_and_ps(face[a], _mm256_sub_ps(_mm256_add_ps(half[a], t), abs[a]));
+        delta[a] = _mm256_mul_ps(_mm256_blendv_ps(face_delta, out_delta, outside), sign[a]);
+        let face_normal = _mm256_and_ps(face[a], one);
+        normal_local[a] = _mm256_mul_ps(
+            _mm256_blendv_ps(face_normal, _mm256_mul_ps(over[a], recip), outside),
+            sign[a],
+        );
+    }
+    let [u, v, w] = axes;
+    let combine = |c: usize, k: [__m256; 3]| {
+        _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(u[c], k[0]), _mm256_mul_ps(v[c], k[1])),
+            _mm256_mul_ps(w[c], k[2]),
+        )
+    };
+    let on = [0, 1, 2].map(|c| _mm256_add_ps(start[c], combine(c, delta)));
+    let normal = [0, 1, 2].map(|c| combine(c, normal_local));
+    let all = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+    let applies = _mm256_or_ps(
+        _mm256_andnot_ps(outside, all),
+        _mm256_cmp_ps::<_CMP_LT_OQ>(dist, _mm256_set1_ps(cuboid.reach)),
+    );
+    let dot = |a: [__m256; 3]| {
+        _mm256_add_ps(
+            _mm256_add_ps(
+                _mm256_mul_ps(normal[0], a[0]),
+                _mm256_mul_ps(normal[1], a[1]),
+            ),
+            _mm256_mul_ps(normal[2], a[2]),
+        )
+    };
+    let (offset, from) = (dot(on), dot(start));
+    let deep = _mm256_sub_ps(offset, _mm256_set1_ps(cuboid.settle));
+    let offset = _mm256_blendv_ps(offset, from, _mm256_cmp_ps::<_CMP_LT_OQ>(from, deep));
+    let none = _mm256_set1_ps(f32::NEG_INFINITY);
+    (normal, _mm256_blendv_ps(none, offset, applies))
+}
+
 /// Lanes of one vector step of [`run_lanes`] (AVX2's eight `f32`).
 const W: usize = 8;
 
@@ -442,11 +738,28 @@ const W: usize = 8;
 /// the substep's start (m), inverse masses, pushes (m) and marks.
 #[derive(Clone, Copy)]
 struct Eight {
+    /// The index of the first among all lanes, and how many are lanes
+    /// (the rest pad a short last step).
+    at: usize,
+    count: usize,
     p: [[f32; W]; 3],
     start: [[f32; W]; 3],
     w: [f32; W],
     depth: [f32; W],
     touch: [u32; W],
+}
+
+impl Eight {
+    /// The plane (normal, offset) of lane `k` of these eight in the
+    /// cuboid's `slot` (none for padding).
+    #[inline(always)]
+    fn plane(&self, law: &Law, slot: usize, k: usize) -> ([f32; 3], f32) {
+        if k < self.count {
+            law.plane(slot, self.at + k)
+        } else {
+            ([0.0; 3], f32::NEG_INFINITY)
+        }
+    }
 }
 
 /// The pass of `law` over the lanes of `c`, eight at a time on copies in
@@ -462,6 +775,8 @@ fn run_lanes(c: Chunk, law: &Law) -> f32 {
     while k < n {
         let m = W.min(n - k);
         let mut e = Eight {
+            at: c.first + k,
+            count: m,
             p: [[0.0; W]; 3],
             start: [[0.0; W]; 3],
             w: [0.0; W],
@@ -477,7 +792,7 @@ fn run_lanes(c: Chunk, law: &Law) -> f32 {
             // Eight lanes clear of every shape and (for friction) pushed by
             // none this substep: the pass would leave every bit as it is.
             let touched = || c.touch[k..k + W].iter().any(|&t| t != 0);
-            if !maybe_inside(&e.p, law.shapes) && (law.friction.is_none() || !touched()) {
+            if !maybe_inside(&e, law) && (law.friction.is_none() || !touched()) {
                 k += W;
                 continue;
             }
@@ -524,13 +839,14 @@ fn run_lanes(c: Chunk, law: &Law) -> f32 {
     farthest.into_iter().fold(0.0, f32::max)
 }
 
-/// Whether a lane of `p` may lie inside one of `shapes` (the test of
-/// [`eight`], with a margin for the rounding of a squared distance: never
-/// false where that test is true).
+/// Whether a lane of `e` may lie inside one of the shapes of `law` (the
+/// test of [`eight`], with a margin for the rounding of a squared
+/// distance: never false where that test is true).
 #[inline(always)]
-fn maybe_inside(p: &[[f32; W]; 3], shapes: &[StillShape]) -> bool {
+fn maybe_inside(e: &Eight, law: &Law) -> bool {
+    let p = &e.p;
     let mut any = false;
-    for &shape in shapes {
+    for &shape in law.shapes {
         match shape {
             StillShape::Ball { centre, reach } => {
                 let near = near_ball(reach);
@@ -544,9 +860,136 @@ fn maybe_inside(p: &[[f32; W]; 3], shapes: &[StillShape]) -> bool {
                     any |= offset - (m.x * p[0][k] + m.y * p[1][k] + m.z * p[2][k]) > 0.0;
                 }
             }
+            StillShape::Cuboid(cuboid) => {
+                for k in 0..W {
+                    let (m, offset) = e.plane(law, cuboid.slot, k);
+                    any |= offset - (m[0] * e.p[0][k] + m[1] * e.p[1][k] + m[2] * e.p[2][k]) > 0.0;
+                }
+            }
         }
     }
     any
+}
+
+impl StillCuboid {
+    /// Where `p` (m) is in the cuboid's frame: per axis, the coordinate
+    /// and how far beyond the face on that side it is (m, negative inside).
+    #[inline(always)]
+    fn local(&self, p: [f32; 3]) -> ([f32; 3], [f32; 3]) {
+        let d = [
+            p[0] - self.centre.x,
+            p[1] - self.centre.y,
+            p[2] - self.centre.z,
+        ];
+        let half = [self.half.x, self.half.y, self.half.z];
+        let mut local = [0.0f32; 3];
+        let mut beyond = [0.0f32; 3];
+        for a in 0..3 {
+            let axis = self.axes[a];
+            local[a] = axis.x * d[0] + axis.y * d[1] + axis.z * d[2];
+            beyond[a] = local[a].abs() - half[a];
+        }
+        (local, beyond)
+    }
+}
+
+/// The point of `cuboid` rounded by its thickness nearest to `p` (m), and
+/// the outward normal there: outside the cuboid, through the nearest point
+/// of its surface; in it, out through the nearest face (the lanes hold a
+/// cuboid only while a substep's motion is small beside it, so that is
+/// the face the lane came in by). Also whether `p` is outside the cuboid
+/// itself, and how far (m) from it. Branch-free, as the AVX2 pass runs it
+/// (the same operations in the same order).
+#[inline(always)]
+fn cuboid_nearest(cuboid: &StillCuboid, p: [f32; 3]) -> ([f32; 3], [f32; 3], bool, f32) {
+    let (local, beyond) = cuboid.local(p);
+    let half = [cuboid.half.x, cuboid.half.y, cuboid.half.z];
+    let t = cuboid.thickness;
+    let over = beyond.map(|b| if b > 0.0 { b } else { 0.0 });
+    let dist2 = over[0] * over[0] + over[1] * over[1] + over[2] * over[2];
+    let outside = dist2 > 0.0;
+    let dist = dist2.sqrt();
+    let recip = 1.0 / dist;
+    let scale = t * recip;
+    // In the cuboid: the face it is least far in from (the first of equals).
+    let x_face = (beyond[0] >= beyond[1]) & (beyond[0] >= beyond[2]);
+    let y_face = !x_face & (beyond[1] >= beyond[2]);
+    let face = [x_face, y_face, !x_face & !y_face];
+    let mut delta = [0.0f32; 3];
+    let mut normal_local = [0.0f32; 3];
+    for a in 0..3 {
+        let sign = 1.0f32.copysign(local[a]);
+        let abs = local[a].abs();
+        let out_delta = if beyond[a] > 0.0 {
+            (half[a] + over[a] * scale) - abs
+        } else {
+            0.0
+        };
+        let face_delta = if face[a] { (half[a] + t) - abs } else { 0.0 };
+        delta[a] = (if outside { out_delta } else { face_delta }) * sign;
+        let face_normal = if face[a] { 1.0 } else { 0.0 };
+        normal_local[a] = (if outside {
+            over[a] * recip
+        } else {
+            face_normal
+        }) * sign;
+    }
+    let [u, v, w] = cuboid.axes;
+    let (u, v, w) = ([u.x, u.y, u.z], [v.x, v.y, v.z], [w.x, w.y, w.z]);
+    let mut to = [0.0f32; 3];
+    let mut normal = [0.0f32; 3];
+    for c in 0..3 {
+        to[c] = p[c] + (u[c] * delta[0] + v[c] * delta[1] + w[c] * delta[2]);
+        normal[c] = u[c] * normal_local[0] + v[c] * normal_local[1] + w[c] * normal_local[2];
+    }
+    (to, normal, outside, dist)
+}
+
+/// The plane (unit normal, offset in m) that holds a lane starting the
+/// substep at `start` against `cuboid`: the tangent plane of the rounded
+/// cuboid at the point nearest to `start`, when `start` is within the
+/// cuboid's reach; otherwise none (an offset of −∞). A plane from where
+/// the lane started, not the nearest point where it is, as the collision
+/// stage's contact planes take it: a lane the springs pull over an edge
+/// is held by the face it was on (the stage's edge pass takes the springs
+/// round the edge). The rounded cuboid is convex: a lane on its plane's
+/// side is outside it.
+#[inline(always)]
+fn cuboid_plane(cuboid: &StillCuboid, start: [f32; 3]) -> ([f32; 3], f32) {
+    let (on, normal, outside, dist) = cuboid_nearest(cuboid, start);
+    let applies = if outside { dist < cuboid.reach } else { true };
+    let offset = normal[0] * on[0] + normal[1] * on[1] + normal[2] * on[2];
+    let from = normal[0] * start[0] + normal[1] * start[1] + normal[2] * start[2];
+    // A lane that starts deep within the thickness (a cloth laid on the
+    // cuboid by hand) is held where it starts along the normal: put out
+    // to the thickness in one substep it would leave at the push over the
+    // substep (a sheet laid 1 cm into a ramp took off at 38 m/s); the
+    // collision stage's pass takes it out.
+    let deep = from < offset - cuboid.settle;
+    let offset = if deep { from } else { offset };
+    (normal, if applies { offset } else { f32::NEG_INFINITY })
+}
+
+/// The planes of `cuboid` ([`cuboid_plane`]) for lanes starting at
+/// `start`, into `out` (normal x, y, z, offset), eight at a time in AVX2
+/// when `simd`.
+fn planes_of(cuboid: &StillCuboid, start: [&[f32]; 3], out: &mut [&mut [f32]; 4], simd: bool) {
+    let n = start[0].len();
+    assert!(start.iter().all(|s| s.len() == n) && out.iter().all(|o| o.len() == n));
+    let mut k = 0;
+    #[cfg(target_arch = "x86_64")]
+    if simd {
+        // SAFETY: `simd` only when the CPU has AVX2.
+        k = unsafe { planes_avx2(cuboid, start, out) };
+    }
+    let _ = simd;
+    for k in k..n {
+        let (normal, offset) = cuboid_plane(cuboid, [start[0][k], start[1][k], start[2][k]]);
+        for a in 0..3 {
+            out[a][k] = normal[a];
+        }
+        out[3][k] = offset;
+    }
 }
 
 /// A squared distance from a ball's centre under which a lane may be
@@ -614,6 +1057,18 @@ fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
                     push[k] = if inside[k] { gap } else { 0.0 };
                 }
             }
+            StillShape::Cuboid(cuboid) => {
+                for k in 0..W {
+                    let (m, offset) = e.plane(law, cuboid.slot, k);
+                    let gap = offset - (m[0] * e.p[0][k] + m[1] * e.p[1][k] + m[2] * e.p[2][k]);
+                    for a in 0..3 {
+                        n[a][k] = m[a];
+                        to[a][k] = e.p[a][k] + m[a] * gap;
+                    }
+                    inside[k] = (gap > 0.0) & (e.w[k] != 0.0);
+                    push[k] = if inside[k] { gap } else { 0.0 };
+                }
+            }
         }
         let coefficient = law.friction.map_or(0.0, |f| f[o]);
         for k in 0..W {
@@ -670,6 +1125,7 @@ fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::collision::contact::{contact_prepared, Analytic, PoseF64};
     use crate::collision::DynamicBody;
     use crate::math::Pose;
     use parry3d::shape::SharedShape;
@@ -718,8 +1174,11 @@ mod tests {
         let law = Law {
             shapes: &contacts.shapes,
             friction: friction.then_some(&contacts.friction[..]),
+            planes: contacts.planes.each_ref().map(|r| &r[..]),
+            lanes: contacts.lanes,
         };
         let chunk = Chunk {
+            first: 0,
             x,
             y,
             z,
@@ -932,8 +1391,8 @@ mod tests {
         assert!(y.iter().all(|&y| (y - THICKNESS).abs() < 1e-6));
     }
 
-    /// The lanes hold still balls and half-spaces only, and no ball the
-    /// substep's motion could carry a particle far into.
+    /// The lanes hold still balls, half-spaces and cuboids only, and no
+    /// ball or cuboid the substep's motion could carry a particle far into.
     #[test]
     fn the_lanes_hold_still_balls_and_planes_only() {
         let [ball, floor] = ball_and_floor();
@@ -957,19 +1416,145 @@ mod tests {
             acceleration: Vector::ZERO,
         });
         assert!(!LaneContacts::holds(&[dynamic], 0.01));
-        let table = Obstacle::cuboid(Vector::splat(0.5), Pose::IDENTITY);
+        let table = Obstacle::cuboid(Vector::new(0.5, 0.02, 0.5), Pose::IDENTITY);
+        assert!(LaneContacts::holds(&[ball.clone(), table.clone()], 0.004));
         assert!(
-            !LaneContacts::holds(&[ball, table.clone()], 0.01),
-            "edges: the planes and the stage"
+            !LaneContacts::holds(&[ball.clone(), table.clone()], 0.006),
+            "a 2 cm top the motion could carry a particle through"
         );
+        let capsule = Obstacle::new(SharedShape::capsule_y(0.5, 0.1), Pose::IDENTITY);
+        assert!(!LaneContacts::holds(&[ball, capsule.clone()], 0.001));
         // What it holds it holds whole, or nothing.
         let mut contacts = LaneContacts::default();
         assert!(
             contacts.begin(std::slice::from_ref(&floor), (THICKNESS, 0.01), 4)
                 && !contacts.is_empty()
         );
-        assert!(!contacts.begin(&[floor, table], (THICKNESS, 0.01), 4) && contacts.is_empty());
+        assert!(!contacts.begin(&[floor, capsule], (THICKNESS, 0.01), 4) && contacts.is_empty());
         assert_eq!(contacts.touching(), 0, "nothing held, nothing touching");
+    }
+
+    /// A turned table top (a cuboid) and lanes that start around and in
+    /// it and move 3 mm in a substep: each free lane that starts within
+    /// the cuboid's reach ends on its plane's side, outside the cuboid by
+    /// the thickness (the rounded cuboid is convex), or, having started
+    /// within the thickness, no deeper than it started; lanes starting beyond
+    /// the reach keep their bits; the planes and the pass are the same
+    /// bits in AVX2 and lane by lane.
+    #[test]
+    fn a_cuboids_planes_put_the_lanes_out_by_the_thickness() {
+        let turn = glam::Quat::from_rotation_z(0.3) * glam::Quat::from_rotation_x(-0.2);
+        let pose = Pose::from_parts(Vector::new(0.1, 1.0, -0.2), turn);
+        let half = Vector::new(0.5, 0.05, 0.4);
+        let table = Obstacle::cuboid(half, pose).with_friction(0.5);
+        let n = 2 * CHUNK + 11;
+        let motion = 0.003;
+        let place = || {
+            let mut l = Lanes::default();
+            l.resize(n);
+            let [x, y, z, sx, sy, sz, w] = l.arrays_mut();
+            for k in 0..n {
+                let s = k as f32;
+                // A point of the cuboid's surface grown by up to 4 cm, in
+                // its frame, from a direction that covers faces, edges
+                // and corners; every eleventh starts inside it.
+                let dir = Vector::new((1.3 * s).sin(), (0.7 * s).cos(), (2.1 * s).sin());
+                let local = (dir * half * 1.2).clamp(-half, half)
+                    + dir.normalize() * (0.04 * ((0.37 * s) % 1.0));
+                let local = if k % 11 == 3 { local * 0.5 } else { local };
+                let start = pose.transform_point(local);
+                let moved = start - pose.rotation * dir.normalize() * motion;
+                (sx[k], sy[k], sz[k]) = (start.x, start.y, start.z);
+                (x[k], y[k], z[k]) = (moved.x, moved.y, moved.z);
+                w[k] = if k % 5 == 0 { 0.0 } else { 1.0 };
+            }
+            l
+        };
+        let mut contacts = LaneContacts::default();
+        assert!(contacts.begin(std::slice::from_ref(&table), (THICKNESS, motion), n));
+        assert!(contacts.holds_cuboid());
+        let mut l = place();
+        let before = bits(&mut l);
+        contacts.take_planes(&mut l, Team::ALONE);
+        contacts.project(&mut l, Team::ALONE);
+        let [x, y, z, sx, sy, sz, w] = l.arrays_mut();
+        let (mut held, mut far, mut inside) = (0, 0, 0);
+        for k in 0..n {
+            let p = Vector::new(x[k], y[k], z[k]);
+            let start = Vector::new(sx[k], sy[k], sz[k]);
+            let old = Vector::new(
+                f32::from_bits(before[k]),
+                f32::from_bits(before[n + k]),
+                f32::from_bits(before[2 * n + k]),
+            );
+            let hit = contact_prepared(
+                &*table.shape,
+                Analytic::of(&*table.shape),
+                &PoseF64::of(&table.pose),
+                start,
+            )
+            .expect("a contact");
+            let within = hit.signed_distance < 2.0 * (THICKNESS + motion) - 1e-4;
+            let beyond = hit.signed_distance > 2.0 * (THICKNESS + motion) + 1e-4;
+            if w[k] == 0.0 || beyond {
+                assert_eq!(p, old, "lane {k} moved");
+                far += usize::from(beyond);
+                continue;
+            }
+            if within {
+                held += 1;
+                let out = contact_prepared(
+                    &*table.shape,
+                    Analytic::of(&*table.shape),
+                    &PoseF64::of(&table.pose),
+                    p,
+                )
+                .expect("a contact");
+                // Out by the thickness; one that started within it no
+                // deeper than it started (the stage takes it out).
+                let floor = hit.signed_distance.min(THICKNESS);
+                assert!(
+                    out.signed_distance > floor - 1e-5,
+                    "lane {k} from {start:?} ({}) ends {} from the cuboid",
+                    hit.signed_distance,
+                    out.signed_distance
+                );
+                inside += usize::from(hit.signed_distance < 0.0);
+            }
+        }
+        assert!(
+            held > n / 2 && far > 0 && inside > 0,
+            "{held} held, {far} beyond, {inside} started inside"
+        );
+        // Lane by lane, without AVX2: the same planes and the same pass.
+        let mut portable = LaneContacts::default();
+        portable.begin(std::slice::from_ref(&table), (THICKNESS, motion), n);
+        let mut m = place();
+        {
+            let [_, _, _, sx, sy, sz, _] = m.arrays_mut();
+            let cuboid = cuboid_of(&portable);
+            let [a, b, c, d] = &mut portable.planes;
+            let mut out = [&mut a[..], &mut b[..], &mut c[..], &mut d[..]];
+            planes_of(&cuboid, [&*sx, &*sy, &*sz], &mut out, false);
+        }
+        assert_eq!(portable.planes, contacts.planes, "the planes' bits");
+        portable_pass(&mut portable, &mut m, false);
+        assert_eq!(bits(&mut m), bits(&mut l));
+        contacts.project_with_friction(&mut l, Team::ALONE);
+        portable_pass(&mut portable, &mut m, true);
+        assert_eq!(bits(&mut m), bits(&mut l));
+        assert_eq!(
+            (&portable.depth, &portable.touch),
+            (&contacts.depth, &contacts.touch)
+        );
+    }
+
+    /// The one cuboid the lanes hold.
+    fn cuboid_of(contacts: &LaneContacts) -> StillCuboid {
+        match contacts.shapes[..] {
+            [StillShape::Cuboid(c)] => c,
+            _ => panic!("not one cuboid"),
+        }
     }
 
     /// Springs between points the lanes left outside: never into a floor;

@@ -193,8 +193,9 @@ impl ClothSolver {
     /// table peaked at 12.3% stretch with the chains' 9 substeps and no
     /// planes, 4.58% at 32 with them (4.53% at the sweeps' 41); the drape
     /// over a ball stays under 5% at 12. A cloth without pins whose every
-    /// obstacle is a still ball or half-space takes at least 12 a frame at
-    /// 60 Hz rather than 16 (`stability.rs` says why).
+    /// obstacle is a still ball, half-space or (out of reach) cuboid takes
+    /// at least 12 a frame at 60 Hz rather than 16 (`stability.rs` says
+    /// why).
     pub fn substeps_among(&self, cloth: &Cloth, obstacles: &[Obstacle], dt: f32) -> u32 {
         let lengthened =
             self.settings.substeps == Substeps::Auto && chains_lengthen(cloth, &self.settings);
@@ -481,8 +482,10 @@ fn max_rest_length(cloth: &Cloth) -> f32 {
 }
 
 /// Whether `cloth` has no pin, no self-collision, and every obstacle is a
-/// still ball or half-space: the lanes may hold their contacts
-/// ([`LaneContacts::may_hold`]).
+/// still ball, half-space or cuboid: the lanes may hold their contacts
+/// ([`LaneContacts::may_hold`]). Asked only while no obstacle with edges
+/// is within reach ([`ClothSolver::substeps_among`]): a cuboid that may
+/// be is the edge rule's.
 fn unpinned_among_round(cloth: &Cloth, obstacles: &[Obstacle]) -> bool {
     !cloth.params.self_collision
         && LaneContacts::may_hold(obstacles)

@@ -107,6 +107,11 @@ pub(crate) struct XpbdOutcome {
     /// ([`LaneContacts::holds`]): the collision stage may wait for the
     /// step's last substep.
     pub contacts_held: bool,
+    /// The lanes held the contacts (and gave them friction), but the
+    /// collision stage must still run after this substep (for its edge
+    /// pass among cuboids, [`CUBOID_STAGE_EVERY`]): the state is back in
+    /// the particles' arrays.
+    pub wants_stage: bool,
     /// At the step's last substep, when the lanes held the contacts: the
     /// particles they pushed out of an obstacle in it (0 otherwise).
     pub touching: u32,
@@ -146,13 +151,19 @@ pub(crate) fn step(
     let model = &sub.model;
     let h = sub.ctx.h;
     let n = x.len();
-    // Where the substep starts, before the prediction moves `x`.
-    collision.contact_planes(
-        (x, v, model.inv_mass),
-        sub.obstacles,
-        (h, sub.ctx.thickness, sub.ctx.substep == 0),
-        &mut ws.planes,
-    );
+    // Where the substep starts, before the prediction moves `x`. Not
+    // where the lanes may hold every contact (a cuboid among them): they
+    // hold it instead, or the collision stage does after the substep.
+    if LaneContacts::may_hold(sub.obstacles) {
+        ws.planes.clear();
+    } else {
+        collision.contact_planes(
+            (x, v, model.inv_mass),
+            sub.obstacles,
+            (h, sub.ctx.thickness, sub.ctx.substep == 0),
+            &mut ws.planes,
+        );
+    }
     let calm = model.wind.is_calm();
     if !calm {
         ws.wind.clear();
@@ -255,6 +266,9 @@ pub(crate) fn step(
             let motion = f32::from_bits(fastest.into_inner()).sqrt() * h;
             let contacts = &mut ws.lane_contacts;
             let held = contacts.begin(sub.obstacles, (sub.ctx.thickness, motion), n);
+            if held {
+                contacts.take_planes(l, team);
+            }
             // The contacts inside the substep: after the chains and each
             // sweep, every particle with a plane is put back onto it.
             let lane = &mut ws.plane_lanes;
@@ -286,7 +300,17 @@ pub(crate) fn step(
             // 128 peaked at 5.12% so, 4.84% this way; 4.90% with the
             // collision stage's friction every substep).
             contacts.project_with_friction(l, team);
-            let room = hold_limit(plan, l, model.stretch_limit, team);
+            let mut room = hold_limit(plan, l, model.stretch_limit, team);
+            if contacts.holds_cuboid() {
+                // A cuboid's planes against the limit, as the collision
+                // stage's planes are held (`hold_planes`).
+                for _ in 0..CUBOID_ROUNDS {
+                    if contacts.project(l, team) <= CUBOID_ROUND_PUSH {
+                        break;
+                    }
+                    room = hold_limit(plan, l, model.stretch_limit, team);
+                }
+            }
             let room = hold_planes((planes, lane), plan, l, (model.stretch_limit, room), team);
             // At the step's last substep the lanes' contacts win over the
             // limit, as the collision stage's do; a spring lengthens by at
@@ -296,13 +320,19 @@ pub(crate) fn step(
             // 4.76% without; N = 64 4.53% either way).
             let last = sub.ctx.substep + 1 == sub.ctx.substeps;
             let pushed = if last { contacts.project(l, team) } else { 0.0 };
+            // Among cuboids the collision stage still runs every
+            // `CUBOID_STAGE_EVERY` substeps, for its edge pass.
+            let wants_stage = held
+                && !last
+                && contacts.holds_cuboid()
+                && (sub.ctx.substep + 1).is_multiple_of(CUBOID_STAGE_EVERY);
             let room = room
                 .map(|room| room - 2.0 * pushed)
                 .filter(|&room| room > 0.0);
             // Velocities from the motion: the predicted velocity plus the
             // sweeps' correction over `h`, the prediction being the start
             // plus `h` times it (as `predict` made it, to the bit).
-            let stay = held && may_stay;
+            let stay = held && may_stay && !wants_stage;
             let lanes = l.disjoint();
             let [vx, vy, vz] = vel.each_mut().map(|c| Disjoint::new(&mut c[..]));
             if stay {
@@ -365,6 +395,7 @@ pub(crate) fn step(
             XpbdOutcome {
                 stretch_room: room,
                 contacts_held: held,
+                wants_stage,
                 touching: if held && last { contacts.touching() } else { 0 },
             }
         }
@@ -392,6 +423,7 @@ pub(crate) fn step(
             XpbdOutcome {
                 stretch_room: None,
                 contacts_held: false,
+                wants_stage: false,
                 touching: 0,
             }
         }
@@ -547,6 +579,36 @@ fn hold_limit(plan: &mut GridPlan, lanes: &mut Lanes, factor: f32, team: Team) -
     }
     outcome.room
 }
+
+/// Rounds of the lanes' contacts against the stretch limit after the
+/// sweeps, where the lanes hold a cuboid (its planes): each pushes the
+/// lanes back out and holds the limit again. Measured on `box` (a 64 × 64
+/// cotton sheet dropped on a cube, 32 substeps, peak stretch over 120
+/// frames), with the collision stage every [`CUBOID_STAGE_EVERY`]
+/// substeps: 7.33% with none, 5.71% with two, 5.08% with four, 4.82%
+/// with six (ms a frame 5.7, 6.8, 6.4, 6.7: the rounds stop early).
+/// The collision stage held the cube through contact planes after every
+/// substep before: 5.30% and 9.1 ms.
+const CUBOID_ROUNDS: u32 = 6;
+
+/// How often (in substeps) the collision stage runs while the lanes hold a
+/// cuboid: the lanes keep every particle out of it, but not the springs
+/// between them off its edges, and the stage's edge pass at the step's
+/// last substep alone had to undo a whole step of springs cutting the
+/// edges, which stretched them (a 48 × 48 tablecloth on a table,
+/// `tests/user_drops.rs`: 4.51% before that pass, 5.66% after it).
+/// Measured, tablecloth peak and `box` (32 substeps) ms a frame and peak:
+/// after every substep 4.59%, 8.4 ms, 4.79%; every second 4.56%, 6.7 ms,
+/// 4.82%; every third 5.39%, 5.9 ms; every fourth 5.57%; at the last two
+/// or four substeps of a step, 5.47% and 5.32%.
+const CUBOID_STAGE_EVERY: u32 = 2;
+
+/// The farthest push (m) of a round of [`CUBOID_ROUNDS`] under which the
+/// rounds stop: it lengthens a spring by at most twice that (0.13% of the
+/// `box`'s 1.6 cm springs). Stopping only where nothing moved, the rounds
+/// ran to the last at rest (the `box` 6.2 against 5.4 ms a frame, the same
+/// peak).
+const CUBOID_ROUND_PUSH: f32 = 1.0e-5;
 
 /// Rounds of the contact planes against the stretch limit after the sweeps:
 /// each pushes the particles back onto their planes, and all but the last
