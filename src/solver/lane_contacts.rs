@@ -523,7 +523,11 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
                 let at = cuboid.slot * law.lanes + c.first + k;
                 let [px, py, pz, po] = law.planes;
                 assert!(at + W <= po.len() && [px.len(), py.len(), pz.len()] == [po.len(); 3]);
-                let m = [px, py, pz].map(|a| _mm256_loadu_ps(a.as_ptr().add(at)));
+                let m = [
+                    _mm256_loadu_ps(px.as_ptr().add(at)),
+                    _mm256_loadu_ps(py.as_ptr().add(at)),
+                    _mm256_loadu_ps(pz.as_ptr().add(at)),
+                ];
                 let offset = _mm256_loadu_ps(po.as_ptr().add(at));
                 let gap = _mm256_sub_ps(
                     offset,
@@ -543,7 +547,11 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
                     continue;
                 }
                 n = m;
-                to = [0, 1, 2].map(|a| _mm256_add_ps(p[a], _mm256_mul_ps(m[a], gap)));
+                to = [
+                    _mm256_add_ps(p[0], _mm256_mul_ps(m[0], gap)),
+                    _mm256_add_ps(p[1], _mm256_mul_ps(m[1], gap)),
+                    _mm256_add_ps(p[2], _mm256_mul_ps(m[2], gap)),
+                ];
                 inside = _mm256_and_ps(behind, free);
                 push = _mm256_and_ps(inside, gap);
             }
@@ -621,7 +629,11 @@ unsafe fn planes_avx2(
     let mut k = 0;
     while k + W <= n {
         // SAFETY: lanes `k..k + 8` are within every array (asserted).
-        let s = start.map(|a| _mm256_loadu_ps(a.as_ptr().add(k)));
+        let s = [
+            _mm256_loadu_ps(start[0].as_ptr().add(k)),
+            _mm256_loadu_ps(start[1].as_ptr().add(k)),
+            _mm256_loadu_ps(start[2].as_ptr().add(k)),
+        ];
         let (normal, offset) = cuboid_plane_avx2(cuboid, s);
         for a in 0..3 {
             _mm256_storeu_ps(out[a].as_mut_ptr().add(k), normal[a]);
@@ -642,28 +654,42 @@ unsafe fn cuboid_plane_avx2(
     cuboid: &StillCuboid,
     start: [std::arch::x86_64::__m256; 3],
 ) -> ([std::arch::x86_64::__m256; 3], std::arch::x86_64::__m256) {
+    // Written with loops over the three axes, not closures: a closure
+    // does not take the function's AVX2 and was called with its vectors
+    // in memory (planes a ninth of the `box`'s frame so).
     use std::arch::x86_64::*;
     let zero = _mm256_setzero_ps();
     let one = _mm256_set1_ps(1.0);
+    let all = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
     let sign_bit = _mm256_set1_ps(-0.0);
-    let centre = [cuboid.centre.x, cuboid.centre.y, cuboid.centre.z].map(|c| _mm256_set1_ps(c));
-    let half = [cuboid.half.x, cuboid.half.y, cuboid.half.z].map(|h| _mm256_set1_ps(h));
     let t = _mm256_set1_ps(cuboid.thickness);
-    let d = [0, 1, 2].map(|c| _mm256_sub_ps(start[c], centre[c]));
-    let axes = cuboid
-        .axes
-        .map(|a| [a.x, a.y, a.z].map(|v| _mm256_set1_ps(v)));
-    let local = axes.map(|axis| {
-        _mm256_add_ps(
+    let centre = [cuboid.centre.x, cuboid.centre.y, cuboid.centre.z];
+    let half = [cuboid.half.x, cuboid.half.y, cuboid.half.z];
+    let mut axes = [[zero; 3]; 3];
+    let mut d = [zero; 3];
+    for a in 0..3 {
+        let axis = cuboid.axes[a];
+        axes[a] = [
+            _mm256_set1_ps(axis.x),
+            _mm256_set1_ps(axis.y),
+            _mm256_set1_ps(axis.z),
+        ];
+        d[a] = _mm256_sub_ps(start[a], _mm256_set1_ps(centre[a]));
+    }
+    let (mut abs, mut sign, mut beyond) = ([zero; 3], [zero; 3], [zero; 3]);
+    let (mut positive, mut over) = ([zero; 3], [zero; 3]);
+    for a in 0..3 {
+        let axis = axes[a];
+        let local = _mm256_add_ps(
             _mm256_add_ps(_mm256_mul_ps(axis[0], d[0]), _mm256_mul_ps(axis[1], d[1])),
             _mm256_mul_ps(axis[2], d[2]),
-        )
-    });
-    let abs = local.map(|l| _mm256_andnot_ps(sign_bit, l));
-    let sign = local.map(|l| _mm256_or_ps(_mm256_and_ps(l, sign_bit), one));
-    let beyond = [0, 1, 2].map(|a| _mm256_sub_ps(abs[a], half[a]));
-    let positive = beyond.map(|b| _mm256_cmp_ps::<_CMP_GT_OQ>(b, zero));
-    let over = [0, 1, 2].map(|a| _mm256_and_ps(positive[a], beyond[a]));
+        );
+        abs[a] = _mm256_andnot_ps(sign_bit, local);
+        sign[a] = _mm256_or_ps(_mm256_and_ps(local, sign_bit), one);
+        beyond[a] = _mm256_sub_ps(abs[a], _mm256_set1_ps(half[a]));
+        positive[a] = _mm256_cmp_ps::<_CMP_GT_OQ>(beyond[a], zero);
+        over[a] = _mm256_and_ps(positive[a], beyond[a]);
+    }
     let dist2 = _mm256_add_ps(
         _mm256_add_ps(
             _mm256_mul_ps(over[0], over[0]),
@@ -675,25 +701,22 @@ unsafe fn cuboid_plane_avx2(
     let dist = _mm256_sqrt_ps(dist2);
     let recip = _mm256_div_ps(one, dist);
     let scale = _mm256_mul_ps(t, recip);
-    let ge = |a: __m256, b: __m256| _mm256_cmp_ps::<_CMP_GE_OQ>(a, b);
-    let x_face = _mm256_and_ps(ge(beyond[0], beyond[1]), ge(beyond[0], beyond[2]));
-    let y_face = _mm256_andnot_ps(x_face, ge(beyond[1], beyond[2]));
-    let z_face = _mm256_andnot_ps(
-        _mm256_or_ps(x_face, y_face),
-        _mm256_castsi256_ps(_mm256_set1_epi32(-1)),
+    let x_face = _mm256_and_ps(
+        _mm256_cmp_ps::<_CMP_GE_OQ>(beyond[0], beyond[1]),
+        _mm256_cmp_ps::<_CMP_GE_OQ>(beyond[0], beyond[2]),
     );
+    let y_face = _mm256_andnot_ps(x_face, _mm256_cmp_ps::<_CMP_GE_OQ>(beyond[1], beyond[2]));
+    let z_face = _mm256_andnot_ps(_mm256_or_ps(x_face, y_face), all);
     let face = [x_face, y_face, z_face];
     let mut delta = [zero; 3];
     let mut normal_local = [zero; 3];
     for a in 0..3 {
+        let h = _mm256_set1_ps(half[a]);
         let out_delta = _mm256_and_ps(
             positive[a],
-            _mm256_sub_ps(
-                _mm256_add_ps(half[a], _mm256_mul_ps(over[a], scale)),
-                abs[a],
-            ),
+            _mm256_sub_ps(_mm256_add_ps(h, _mm256_mul_ps(over[a], scale)), abs[a]),
         );
-        let face_delta = _mm256_and_ps(face[a], _mm256_sub_ps(_mm256_add_ps(half[a], t), abs[a]));
+        let face_delta = _mm256_and_ps(face[a], _mm256_sub_ps(_mm256_add_ps(h, t), abs[a]));
         delta[a] = _mm256_mul_ps(_mm256_blendv_ps(face_delta, out_delta, outside), sign[a]);
         let face_normal = _mm256_and_ps(face[a], one);
         normal_local[a] = _mm256_mul_ps(
@@ -702,29 +725,39 @@ unsafe fn cuboid_plane_avx2(
         );
     }
     let [u, v, w] = axes;
-    let combine = |c: usize, k: [__m256; 3]| {
-        _mm256_add_ps(
-            _mm256_add_ps(_mm256_mul_ps(u[c], k[0]), _mm256_mul_ps(v[c], k[1])),
-            _mm256_mul_ps(w[c], k[2]),
-        )
-    };
-    let on = [0, 1, 2].map(|c| _mm256_add_ps(start[c], combine(c, delta)));
-    let normal = [0, 1, 2].map(|c| combine(c, normal_local));
-    let all = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+    let (mut on, mut normal) = ([zero; 3], [zero; 3]);
+    for c in 0..3 {
+        let moved = _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(u[c], delta[0]), _mm256_mul_ps(v[c], delta[1])),
+            _mm256_mul_ps(w[c], delta[2]),
+        );
+        on[c] = _mm256_add_ps(start[c], moved);
+        normal[c] = _mm256_add_ps(
+            _mm256_add_ps(
+                _mm256_mul_ps(u[c], normal_local[0]),
+                _mm256_mul_ps(v[c], normal_local[1]),
+            ),
+            _mm256_mul_ps(w[c], normal_local[2]),
+        );
+    }
     let applies = _mm256_or_ps(
         _mm256_andnot_ps(outside, all),
         _mm256_cmp_ps::<_CMP_LT_OQ>(dist, _mm256_set1_ps(cuboid.reach)),
     );
-    let dot = |a: [__m256; 3]| {
+    let offset = _mm256_add_ps(
         _mm256_add_ps(
-            _mm256_add_ps(
-                _mm256_mul_ps(normal[0], a[0]),
-                _mm256_mul_ps(normal[1], a[1]),
-            ),
-            _mm256_mul_ps(normal[2], a[2]),
-        )
-    };
-    let (offset, from) = (dot(on), dot(start));
+            _mm256_mul_ps(normal[0], on[0]),
+            _mm256_mul_ps(normal[1], on[1]),
+        ),
+        _mm256_mul_ps(normal[2], on[2]),
+    );
+    let from = _mm256_add_ps(
+        _mm256_add_ps(
+            _mm256_mul_ps(normal[0], start[0]),
+            _mm256_mul_ps(normal[1], start[1]),
+        ),
+        _mm256_mul_ps(normal[2], start[2]),
+    );
     let deep = _mm256_sub_ps(offset, _mm256_set1_ps(cuboid.settle));
     let offset = _mm256_blendv_ps(offset, from, _mm256_cmp_ps::<_CMP_LT_OQ>(from, deep));
     let none = _mm256_set1_ps(f32::NEG_INFINITY);
