@@ -28,8 +28,8 @@
 //! contact planes did: a lane pulled over an edge stays on the face it was
 //! on. The lanes do not see the springs between particles, which may cut
 //! a cuboid's edge: there the collision stage's edge pass still runs every
-//! second substep (`xpbd::CUBOID_STAGE_EVERY`). The `box` went from 9.1 to
-//! 6.5 ms a frame so, its peak stretch from 5.30% to 4.78%.
+//! second substep (`xpbd::CUBOID_STAGE_EVERY`). The `box` went from 9.0 to
+//! 5.9 ms a frame so, its peak stretch from 5.20% to 4.78%.
 
 use crate::collision::{chords_clear_ball, Obstacle};
 use crate::math::{simd_available, Vector};
