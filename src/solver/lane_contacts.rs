@@ -783,6 +783,18 @@ struct Eight {
 }
 
 impl Eight {
+    /// The half-space (unit normal, offset: `normal · x ≥ offset`) that
+    /// `shape` holds lane `k` of these eight in: a plane's own, a
+    /// cuboid's plane for the lane; none (an offset of −∞) for a ball.
+    #[inline(always)]
+    fn half_space(&self, law: &Law, shape: StillShape, k: usize) -> ([f32; 3], f32) {
+        match shape {
+            StillShape::Plane { normal, offset } => ([normal.x, normal.y, normal.z], offset),
+            StillShape::Cuboid(cuboid) => self.plane(law, cuboid.slot, k),
+            StillShape::Ball { .. } => ([0.0; 3], f32::NEG_INFINITY),
+        }
+    }
+
     /// The plane (normal, offset) of lane `k` of these eight in the
     /// cuboid's `slot` (none for padding).
     #[inline(always)]
@@ -1078,21 +1090,9 @@ fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
                     push[k] = if inside[k] { reach - length } else { 0.0 };
                 }
             }
-            StillShape::Plane { normal: m, offset } => {
-                let m = [m.x, m.y, m.z];
+            StillShape::Plane { .. } | StillShape::Cuboid(_) => {
                 for k in 0..W {
-                    let gap = offset - (m[0] * e.p[0][k] + m[1] * e.p[1][k] + m[2] * e.p[2][k]);
-                    for a in 0..3 {
-                        n[a][k] = m[a];
-                        to[a][k] = e.p[a][k] + m[a] * gap;
-                    }
-                    inside[k] = (gap > 0.0) & (e.w[k] != 0.0);
-                    push[k] = if inside[k] { gap } else { 0.0 };
-                }
-            }
-            StillShape::Cuboid(cuboid) => {
-                for k in 0..W {
-                    let (m, offset) = e.plane(law, cuboid.slot, k);
+                    let (m, offset) = e.half_space(law, shape, k);
                     let gap = offset - (m[0] * e.p[0][k] + m[1] * e.p[1][k] + m[2] * e.p[2][k]);
                     for a in 0..3 {
                         n[a][k] = m[a];
