@@ -157,8 +157,11 @@ impl LaneContacts {
             return false;
         }
         for o in obstacles {
-            let shape = o.shape.as_cuboid();
-            let shape = match (o.shape.as_ball(), o.shape.as_halfspace(), shape) {
+            let shape = match (
+                o.shape.as_ball(),
+                o.shape.as_halfspace(),
+                o.shape.as_cuboid(),
+            ) {
                 (Some(ball), _, _) => StillShape::Ball {
                     centre: o.pose.translation,
                     reach: ball.radius + thickness,
@@ -171,11 +174,7 @@ impl LaneContacts {
                     }
                 }
                 (None, None, Some(cuboid)) => StillShape::Cuboid(StillCuboid {
-                    slot: self
-                        .shapes
-                        .iter()
-                        .filter(|s| matches!(s, StillShape::Cuboid(_)))
-                        .count(),
+                    slot: self.cuboids(),
                     centre: o.pose.translation,
                     axes: [Vector::X, Vector::Y, Vector::Z]
                         .map(|axis| (o.pose.rotation * axis).normalize()),
@@ -202,11 +201,7 @@ impl LaneContacts {
         self.touch.clear();
         self.touch.resize(n, 0);
         self.lanes = n;
-        let slots = self
-            .shapes
-            .iter()
-            .filter(|s| matches!(s, StillShape::Cuboid(_)))
-            .count();
+        let slots = self.cuboids();
         for record in &mut self.planes {
             record.clear();
             record.resize(slots * n, 0.0);
@@ -251,9 +246,15 @@ impl LaneContacts {
 
     /// Whether the lanes hold a cuboid this substep.
     pub fn holds_cuboid(&self) -> bool {
+        self.cuboids() > 0
+    }
+
+    /// How many cuboids the lanes hold (each its slot of plane records).
+    fn cuboids(&self) -> usize {
         self.shapes
             .iter()
-            .any(|s| matches!(s, StillShape::Cuboid(_)))
+            .filter(|s| matches!(s, StillShape::Cuboid(_)))
+            .count()
     }
 
     /// Whether there is anything to hold this substep.
@@ -506,15 +507,9 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
             }
             StillShape::Plane { normal: m, offset } => {
                 let m = [m.x, m.y, m.z].map(|v| _mm256_set1_ps(v));
-                let gap = _mm256_sub_ps(
-                    _mm256_set1_ps(offset),
-                    _mm256_add_ps(
-                        _mm256_add_ps(_mm256_mul_ps(m[0], p[0]), _mm256_mul_ps(m[1], p[1])),
-                        _mm256_mul_ps(m[2], p[2]),
-                    ),
-                );
+                let (gap, on) = behind_plane_avx2(m, _mm256_set1_ps(offset), p);
                 n = m;
-                to = [0, 1, 2].map(|a| _mm256_add_ps(p[a], _mm256_mul_ps(m[a], gap)));
+                to = on;
                 inside = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(gap, zero), free);
                 push = _mm256_and_ps(inside, gap);
             }
@@ -529,13 +524,7 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
                     _mm256_loadu_ps(pz.as_ptr().add(at)),
                 ];
                 let offset = _mm256_loadu_ps(po.as_ptr().add(at));
-                let gap = _mm256_sub_ps(
-                    offset,
-                    _mm256_add_ps(
-                        _mm256_add_ps(_mm256_mul_ps(m[0], p[0]), _mm256_mul_ps(m[1], p[1])),
-                        _mm256_mul_ps(m[2], p[2]),
-                    ),
-                );
+                let (gap, on) = behind_plane_avx2(m, offset, p);
                 let behind = _mm256_cmp_ps::<_CMP_GT_OQ>(gap, zero);
                 // No lane behind its plane nor last pushed by it: as for
                 // the ball.
@@ -547,11 +536,7 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
                     continue;
                 }
                 n = m;
-                to = [
-                    _mm256_add_ps(p[0], _mm256_mul_ps(m[0], gap)),
-                    _mm256_add_ps(p[1], _mm256_mul_ps(m[1], gap)),
-                    _mm256_add_ps(p[2], _mm256_mul_ps(m[2], gap)),
-                ];
+                to = on;
                 inside = _mm256_and_ps(behind, free);
                 push = _mm256_and_ps(inside, gap);
             }
@@ -612,6 +597,34 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
     _mm256_storeu_ps(z, p[2]);
     _mm256_storeu_ps(depth_at, depth);
     _mm256_storeu_si256(touch_at, _mm256_castps_si256(touch));
+}
+
+/// Eight lanes at `p` (m) against the half-spaces `m · x ≥ offset` (unit
+/// normals `m`, offsets in m): how far behind its plane each is (m,
+/// negative in front) and its point on the plane, as the portable pass
+/// computes them.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn behind_plane_avx2(
+    m: [std::arch::x86_64::__m256; 3],
+    offset: std::arch::x86_64::__m256,
+    p: [std::arch::x86_64::__m256; 3],
+) -> (std::arch::x86_64::__m256, [std::arch::x86_64::__m256; 3]) {
+    use std::arch::x86_64::*;
+    let gap = _mm256_sub_ps(
+        offset,
+        _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(m[0], p[0]), _mm256_mul_ps(m[1], p[1])),
+            _mm256_mul_ps(m[2], p[2]),
+        ),
+    );
+    let on = [
+        _mm256_add_ps(p[0], _mm256_mul_ps(m[0], gap)),
+        _mm256_add_ps(p[1], _mm256_mul_ps(m[1], gap)),
+        _mm256_add_ps(p[2], _mm256_mul_ps(m[2], gap)),
+    ];
+    (gap, on)
 }
 
 /// [`planes_of`] for every whole eight lanes, in AVX2; returns how many
