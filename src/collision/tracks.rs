@@ -286,6 +286,22 @@ impl ObstacleTracks {
         }
     }
 
+    /// How far (squared, m²) particle `i`, now at `point`, is from its
+    /// anchor, when its cached list is empty and it is still within the
+    /// margin: it can then touch no obstacle, and the particle pass has
+    /// nothing to do for it but note the drift. `None` otherwise (no cache,
+    /// candidates cached, or out of the margin).
+    #[inline]
+    pub(super) fn free_drift2(&self, i: usize, point: Vector) -> Option<f32> {
+        let anchor = self.anchor(i)?;
+        let from_anchor = point - anchor;
+        let listed = self.cache_start.get(i..i + 2).is_none_or(|c| c[0] != c[1]);
+        if listed || from_anchor.abs().max_element() > self.cache_margin {
+            return None;
+        }
+        Some(from_anchor.length_squared())
+    }
+
     /// True when particle `i` has candidates in the step's cache: while it
     /// stays within the margin, it can come near no obstacle otherwise.
     pub(super) fn has_cached(&self, i: usize) -> bool {
