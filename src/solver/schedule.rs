@@ -154,8 +154,7 @@ impl ClothSolver {
             0.0
         };
 
-        // Below a few thousand particles the loops are too short to share.
-        let threads = self.settings.parallel && n >= TEAM_MIN_PARTICLES;
+        let threads = self.settings.parallel && shares_well(cloth, integrator);
         let mut report = with_team(threads, |team| {
             self.substeps(cloth, obstacles, (dt, k, longest_rest, layer), team)
         })?;
@@ -427,6 +426,20 @@ fn look_basis(cloth: &Cloth, thickness: f32) -> LookBasis<'_> {
 
 /// Particles from which a step's loops are shared among threads.
 const TEAM_MIN_PARTICLES: usize = 2048;
+
+/// True when a step of `cloth` with `integrator` gains from a team of
+/// threads: a few thousand particles or more (below, the loops are too
+/// short to share), and loops that keep their data on one thread. Not so
+/// the small-steps solver on a cloth without a grid (torn, joined, a mesh)
+/// and without self-collision: its spring sweep runs on one thread, and the
+/// particles the collision stage's blocks moved on the other came back to
+/// it every substep (the torn sheet, 64 × 32 and 128 × 64: 3.0 → 3.4 and
+/// 31 → 34 ms a frame with two threads, its serial sweep the slower).
+fn shares_well(cloth: &Cloth, integrator: Integrator) -> bool {
+    let serial =
+        integrator == Integrator::Xpbd && cloth.grid().is_none() && !cloth.params.self_collision;
+    cloth.particle_count() >= TEAM_MIN_PARTICLES && !serial
+}
 
 /// Puts the cloth back as it was at the start of the step.
 fn restore(cloth: &mut Cloth, ws: &super::workspace::Workspace) {
