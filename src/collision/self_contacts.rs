@@ -150,11 +150,7 @@ impl Look<'_> {
         let pad = Vector::splat(reach);
         let (lo, hi) = (a.min(b).min(c) - pad, a.max(b).max(c) + pad);
         let first = out.len();
-        hash.for_each_in(lo, hi, |p| {
-            let xp = x[p as usize];
-            if !(xp.cmpge(lo).all() && xp.cmple(hi).all()) {
-                return;
-            }
+        hash.for_each_inside(lo, hi, |p, xp| {
             let d = (xp - a).dot(n);
             if d.abs() >= reach || sheet.holds(p) {
                 return;

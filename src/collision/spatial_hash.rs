@@ -19,6 +19,11 @@ pub(crate) struct SpatialHash {
     entries: Vec<u32>,
     /// Per point: its cell.
     cells: Vec<[i32; 3]>,
+    /// Per entry: its point's cell and position (m), so that a query reads
+    /// a bucket's points from one stretch of memory (the self-collision
+    /// look went to loading them point by point from wherever they were).
+    entry_cells: Vec<[i32; 3]>,
+    entry_points: Vec<Vector>,
 }
 
 /// Cells a query may visit before it visits every point instead (a box
@@ -59,6 +64,45 @@ impl SpatialHash {
             self.start[b] -= 1;
             self.entries[self.start[b] as usize] = i as u32;
         }
+        self.entry_cells.clear();
+        self.entry_cells
+            .extend(self.entries.iter().map(|&i| self.cells[i as usize]));
+        self.entry_points.clear();
+        self.entry_points
+            .extend(self.entries.iter().map(|&i| points[i as usize]));
+    }
+
+    /// Calls `f` with the index and position (m) of every point inside the
+    /// box `min..=max` (metres; a point that is not a number is in no box),
+    /// each once: the points [`SpatialHash::for_each_in`] visits, less
+    /// those outside the box, tested here without a call each.
+    pub fn for_each_inside(&self, min: Vector, max: Vector, mut f: impl FnMut(u32, Vector)) {
+        let inside = |p: Vector| p.cmpge(min).all() && p.cmple(max).all();
+        let (lo, hi) = (self.cell_of(min), self.cell_of(max));
+        let span = |a: usize| (hi[a] as i64 - lo[a] as i64 + 1).max(0);
+        if span(0) * span(1) * span(2) > MAX_QUERY_CELLS {
+            for (k, &p) in self.entry_points.iter().enumerate() {
+                if inside(p) {
+                    f(self.entries[k], p);
+                }
+            }
+            return;
+        }
+        for_cells((lo, hi), |c| {
+            let b = self.bucket(c);
+            let bucket = self.start[b] as usize..self.start[b + 1] as usize;
+            let (cells, points) = (
+                &self.entry_cells[bucket.clone()],
+                &self.entry_points[bucket.clone()],
+            );
+            for (k, (&cell, &p)) in cells.iter().zip(points).enumerate() {
+                // Another cell may share the bucket; each point is visited
+                // from its own cell only.
+                if cell == c && inside(p) {
+                    f(self.entries[bucket.start + k], p);
+                }
+            }
+        });
     }
 
     /// Calls `f` once for every point whose cell meets the box `min..=max`
@@ -162,6 +206,49 @@ mod tests {
                     assert!(near, "point {i} at {p:?} is a cell away from the box");
                 }
             }
+        }
+    }
+
+    /// The box query hands out exactly the points inside the box, each once
+    /// with its position, on both of its paths (few cells, and a box over
+    /// more than `MAX_QUERY_CELLS`); a point that is not a number is in none.
+    #[test]
+    fn box_queries_hand_out_the_points_inside_once() {
+        let mut points: Vec<Vector> = (0..1500)
+            .map(|i| {
+                let f =
+                    |k: u32| ((i as u32).wrapping_mul(2_654_435_761).rotate_left(k) % 1000) as f32;
+                Vector::new(f(0) * 1e-3, f(9) * 5e-4, f(17) * 2e-3 - 1.0)
+            })
+            .collect();
+        points[7] = Vector::new(f32::NAN, 0.2, 0.0);
+        let mut hash = SpatialHash::default();
+        hash.build(&points, 0.05);
+        for (min, max) in [
+            (Vector::new(0.2, 0.1, -0.5), Vector::new(0.4, 0.3, 0.1)),
+            (Vector::splat(-10.0), Vector::splat(10.0)),
+            (Vector::new(0.9, 0.9, 0.9), Vector::new(0.8, 1.0, 1.0)),
+        ] {
+            let mut seen = vec![0u32; points.len()];
+            hash.for_each_inside(min, max, |i, p| {
+                assert_eq!(
+                    p.to_array().map(f32::to_bits),
+                    points[i as usize].to_array().map(f32::to_bits)
+                );
+                seen[i as usize] += 1;
+            });
+            let mut inside = 0;
+            for (i, p) in points.iter().enumerate() {
+                let want = p.cmpge(min).all() && p.cmple(max).all();
+                inside += u32::from(want);
+                assert_eq!(
+                    seen[i],
+                    u32::from(want),
+                    "point {i} at {p:?}, box {min:?}..{max:?}"
+                );
+            }
+            // The boxes hold some points but the empty one.
+            assert_eq!(inside == 0, min.x > max.x, "{min:?}..{max:?}");
         }
     }
 }
