@@ -7,10 +7,11 @@
 //! hash of the particles ([`SpatialHash`]) gives each triangle the
 //! particles within reach of it, `thickness + margin`. A look costs a pass
 //! over the triangles, so it is taken again only when it may have missed
-//! a pair: whenever some particle has moved more than half the margin
-//! since the last look, relative to the particles' mean motion (two
-//! particles then cannot have closed in by more than the margin: a
-//! neighbour list with a skin, as in molecular dynamics), and when the
+//! a pair: whenever two particles may have closed in by more than the
+//! margin since the last look (a neighbour list with a skin, as in
+//! molecular dynamics), by the smaller of two bounds: the diagonal of the
+//! box around the particles' motions, and twice the farthest motion from
+//! their mean; and when the
 //! cloth, its thickness or the margin changed. Every substep for a cloth
 //! in violent motion, seldom for one at rest or in free fall: a look
 //! carries over from step to step (the `stack` at rest looked once a step
@@ -313,8 +314,8 @@ impl SelfContacts {
     }
 
     /// True when particles at `x` may have closed in on each other by more
-    /// than the margin since the `look` (or there is none): some particle
-    /// moved more than half of it relative to the mean motion.
+    /// than the margin since the `look` (or there is none), by the module's
+    /// two bounds.
     pub(crate) fn due(&self, look: &Option<SelfLook>, x: &[Vector]) -> bool {
         let Some(look) = look else {
             return true;
@@ -324,13 +325,27 @@ impl SelfContacts {
         }
         let n = x.len().max(1) as f32;
         let moved = x.iter().zip(&look.at).map(|(&x, &at)| x - at);
-        let mean = moved.clone().fold(Vector::ZERO, |s, d| s + d) / n;
+        // Two particles closed in by at most the diagonal of the box
+        // around every motion: a cloth falling onto a still one (the
+        // `stack`) has moved its whole fall by then, against two thirds of
+        // it from the mean of both.
+        let (mut lo, mut hi, mut sum) = (Vector::INFINITY, Vector::NEG_INFINITY, Vector::ZERO);
+        for d in moved.clone() {
+            if !d.is_finite() {
+                return true; // lost: look again
+            }
+            (lo, hi, sum) = (lo.min(d), hi.max(d), sum + d);
+        }
+        if (hi - lo).length_squared() <= self.margin * self.margin {
+            return false;
+        }
+        // And by at most twice the farthest motion from the mean (the
+        // smaller bound for a cloth that turns).
+        let mean = sum / n;
         let half = 0.5 * self.margin;
-        moved.into_iter().any(|d| {
-            let r2 = (d - mean).length_squared();
-            // A motion that is not a number: look again.
-            r2 > half * half || r2.is_nan()
-        })
+        moved
+            .into_iter()
+            .any(|d| (d - mean).length_squared() > half * half)
     }
 
     /// Looks for pairs at positions `x` (the `basis`'s thickness and
@@ -605,7 +620,7 @@ mod tests {
     use crate::cloth::ClothBuilder;
 
     #[test]
-    fn a_look_is_due_once_a_particle_moved_half_the_margin_relative_to_the_rest() {
+    fn a_look_is_due_once_two_particles_may_have_closed_in_by_the_margin() {
         let cloth = ClothBuilder::new(4, 4).build().unwrap();
         let topology = &*cloth.topology;
         let x = cloth.positions().to_vec();
@@ -625,15 +640,40 @@ mod tests {
         // The whole cloth falling: no two particles closed in.
         let fell: Vec<Vector> = x.iter().map(|&p| p - Vector::Y * 0.3).collect();
         assert!(!contacts.due(&look, &fell));
-        // One particle of 16 moved 15/16 of its motion relative to the mean.
+        // One particle of 16 moved: it closed in on the others by its
+        // motion, which may reach the margin (1 cm).
         let moved = |dy: f32| {
             let mut y = x.clone();
             y[5].y += dy;
             y
         };
-        assert!(!contacts.due(&look, &moved(0.0053)), "4.97 mm relative");
-        assert!(contacts.due(&look, &moved(0.0054)), "5.06 mm relative");
+        assert!(!contacts.due(&look, &moved(0.0099)), "9.9 mm");
+        assert!(contacts.due(&look, &moved(0.0101)), "10.1 mm");
         assert!(contacts.due(&look, &moved(f32::NAN)), "lost: look again");
+        // Two particles moved 4 mm apart along x and y each (5.7 mm each,
+        // 11.3 mm from each other): due, though each moved less than the
+        // margin.
+        let apart = |d: f32| {
+            let mut y = x.clone();
+            y[3] += Vector::new(d, d, 0.0);
+            y[9] -= Vector::new(d, d, 0.0);
+            y
+        };
+        assert!(contacts.due(&look, &apart(0.004)));
+        assert!(!contacts.due(&look, &apart(0.0034)), "9.6 mm apart");
+        // Four particles moved out along ±x and ±z: the box around the
+        // motions is 2√2 times one motion wide, but no two particles closed
+        // in by more than twice one motion, which the mean tells.
+        let cross = |d: f32| {
+            let mut y = x.clone();
+            y[1].x += d;
+            y[2].x -= d;
+            y[4].z += d;
+            y[8].z -= d;
+            y
+        };
+        assert!(!contacts.due(&look, &cross(0.0045)), "9 mm at most");
+        assert!(contacts.due(&look, &cross(0.0051)), "10.2 mm");
         // The look carries over to the next step, unless the thickness
         // (or the margin, or the particles) changed.
         contacts.begin_step(&mut look, &basis(0.002), Team::ALONE);
