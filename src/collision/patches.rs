@@ -137,8 +137,11 @@ impl Patches {
         self.hi.resize(count, Vector::splat(f32::NEG_INFINITY));
         self.axis.clear();
         self.axis.resize(count, Vector::ZERO);
+        // First each patch's least cosine (−∞ for a triangle or axis that
+        // is not a number): the widest angle is its arc cosine, one a patch
+        // rather than one a triangle (the arc cosine was 2% of the fold).
         self.spread.clear();
-        self.spread.resize(count, 0.0);
+        self.spread.resize(count, 1.0);
         for piece in &self.pieces {
             for t in piece.triangles() {
                 let k = piece.patch_of(t);
@@ -152,14 +155,21 @@ impl Patches {
                 let [a, b, c] = triangles[t].map(|i| x[i as usize]);
                 let n = (b - a).cross(c - a);
                 let cos = n.dot(self.axis[k]) / (n.length() * self.axis[k].length());
-                // NaN (a degenerate triangle or axis) counts as the widest.
-                let angle = if cos.is_finite() {
-                    cos.clamp(-1.0, 1.0).acos()
+                let cos = if cos.is_finite() {
+                    cos
                 } else {
-                    std::f32::consts::PI
+                    f32::NEG_INFINITY
                 };
-                self.spread[k] = self.spread[k].max(angle);
+                self.spread[k] = self.spread[k].min(cos);
             }
+        }
+        for spread in &mut self.spread {
+            // NaN (a degenerate triangle or axis) counts as the widest.
+            *spread = if *spread == f32::NEG_INFINITY {
+                std::f32::consts::PI
+            } else {
+                spread.clamp(-1.0, 1.0).acos()
+            };
         }
         self.quiet.clear();
         let pad = Vector::splat(reach);
