@@ -5,7 +5,7 @@
 //! bucket's points stored contiguously in point order. Built in O(n)
 //! whenever the points move; allocates nothing once warmed up.
 
-use crate::math::Vector;
+use crate::math::{simd_available, Vector};
 
 /// Points by cell, for "which points lie in this box" queries.
 #[derive(Debug, Default, Clone)]
@@ -19,12 +19,21 @@ pub(crate) struct SpatialHash {
     entries: Vec<u32>,
     /// Per point: its cell.
     cells: Vec<[i32; 3]>,
-    /// Per entry: its point's cell and position (m), so that a query reads
-    /// a bucket's points from one stretch of memory (the self-collision
-    /// look went to loading them point by point from wherever they were).
-    entry_cells: Vec<[i32; 3]>,
-    entry_points: Vec<Vector>,
+    /// Per entry: its point's cell and position (m), coordinate by
+    /// coordinate, so that a query reads a bucket's points from one
+    /// stretch of memory (the self-collision look went to loading them
+    /// point by point from wherever they were), eight at a time where the
+    /// CPU has AVX2. [`PAD`] entries longer than the points, so that eight
+    /// lanes read from a bucket's last entry stay inside.
+    entry_cells: [Vec<i32>; 3],
+    entry_points: [Vec<f32>; 3],
+    /// The CPU has AVX2.
+    simd: bool,
 }
+
+/// Lanes of the AVX2 scan, and the padding past the last entry that its
+/// loads may read.
+const PAD: usize = 8;
 
 /// Cells a query may visit before it visits every point instead (a box
 /// over a cloth that has flown apart would otherwise take forever).
@@ -64,12 +73,22 @@ impl SpatialHash {
             self.start[b] -= 1;
             self.entries[self.start[b] as usize] = i as u32;
         }
-        self.entry_cells.clear();
-        self.entry_cells
-            .extend(self.entries.iter().map(|&i| self.cells[i as usize]));
-        self.entry_points.clear();
-        self.entry_points
-            .extend(self.entries.iter().map(|&i| points[i as usize]));
+        for a in 0..3 {
+            let (cells, coordinates) = (&mut self.entry_cells[a], &mut self.entry_points[a]);
+            cells.clear();
+            cells.extend(self.entries.iter().map(|&i| self.cells[i as usize][a]));
+            cells.resize(n + PAD, 0);
+            coordinates.clear();
+            coordinates.extend(self.entries.iter().map(|&i| points[i as usize][a]));
+            coordinates.resize(n + PAD, 0.0);
+        }
+        self.simd = simd_available();
+    }
+
+    /// The position (m) of entry `k`.
+    fn entry_point(&self, k: usize) -> Vector {
+        let [x, y, z] = &self.entry_points;
+        Vector::new(x[k], y[k], z[k])
     }
 
     /// Calls `f` with the index and position (m) of every point inside the
@@ -81,28 +100,96 @@ impl SpatialHash {
         let (lo, hi) = (self.cell_of(min), self.cell_of(max));
         let span = |a: usize| (hi[a] as i64 - lo[a] as i64 + 1).max(0);
         if span(0) * span(1) * span(2) > MAX_QUERY_CELLS {
-            for (k, &p) in self.entry_points.iter().enumerate() {
+            for k in 0..self.entries.len() {
+                let p = self.entry_point(k);
                 if inside(p) {
                     f(self.entries[k], p);
                 }
             }
             return;
         }
+        let mut hand = |k: usize| f(self.entries[k], self.entry_point(k));
         for_cells((lo, hi), |c| {
             let b = self.bucket(c);
             let bucket = self.start[b] as usize..self.start[b + 1] as usize;
-            let (cells, points) = (
-                &self.entry_cells[bucket.clone()],
-                &self.entry_points[bucket.clone()],
-            );
-            for (k, (&cell, &p)) in cells.iter().zip(points).enumerate() {
+            #[cfg(target_arch = "x86_64")]
+            if self.simd {
+                // SAFETY: `simd` only when the CPU has AVX2.
+                unsafe { self.scan_avx2(bucket, c, (min, max), &mut hand) };
+                return;
+            }
+            for k in bucket {
                 // Another cell may share the bucket; each point is visited
                 // from its own cell only.
-                if cell == c && inside(p) {
-                    f(self.entries[bucket.start + k], p);
+                let cell = self.entry_cells.each_ref().map(|cells| cells[k]);
+                if cell == c && inside(self.entry_point(k)) {
+                    hand(k);
                 }
             }
         });
+    }
+
+    /// The entries `bucket` of cell `c` inside the box `min..=max`, eight
+    /// at a time, handed to `hand` in entry order: the portable loop's
+    /// tests (ordered compares: a point that is not a number is outside).
+    ///
+    /// # Safety
+    /// The CPU has AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn scan_avx2(
+        &self,
+        bucket: std::ops::Range<usize>,
+        c: [i32; 3],
+        (min, max): (Vector, Vector),
+        hand: &mut impl FnMut(usize),
+    ) {
+        use std::arch::x86_64::*;
+        // Eight lanes from any entry of the bucket stay inside the arrays.
+        let n = self.entries.len();
+        assert!(bucket.end <= n);
+        assert!(self.entry_cells.iter().all(|v| v.len() == n + PAD));
+        assert!(self.entry_points.iter().all(|v| v.len() == n + PAD));
+        // Written out, not mapped: a closure would not be compiled for AVX2.
+        let cell = [
+            _mm256_set1_epi32(c[0]),
+            _mm256_set1_epi32(c[1]),
+            _mm256_set1_epi32(c[2]),
+        ];
+        let lo = [
+            _mm256_set1_ps(min.x),
+            _mm256_set1_ps(min.y),
+            _mm256_set1_ps(min.z),
+        ];
+        let hi = [
+            _mm256_set1_ps(max.x),
+            _mm256_set1_ps(max.y),
+            _mm256_set1_ps(max.z),
+        ];
+        let lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+        let mut k = bucket.start;
+        while k < bucket.end {
+            // Lanes past the bucket's end read the next bucket or the pad,
+            // and are masked off.
+            let left = _mm256_set1_epi32((bucket.end - k) as i32);
+            let mut keep = _mm256_castsi256_ps(_mm256_cmpgt_epi32(left, lane));
+            for a in 0..3 {
+                let cells = self.entry_cells[a].as_ptr().add(k) as *const __m256i;
+                let same = _mm256_cmpeq_epi32(_mm256_loadu_si256(cells), cell[a]);
+                let at = _mm256_loadu_ps(self.entry_points[a].as_ptr().add(k));
+                let within = _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_GE_OQ>(at, lo[a]),
+                    _mm256_cmp_ps::<_CMP_LE_OQ>(at, hi[a]),
+                );
+                keep = _mm256_and_ps(keep, _mm256_and_ps(_mm256_castsi256_ps(same), within));
+            }
+            let mut bits = _mm256_movemask_ps(keep) as u32;
+            while bits != 0 {
+                hand(k + bits.trailing_zeros() as usize);
+                bits &= bits - 1;
+            }
+            k += PAD;
+        }
     }
 
     /// Calls `f` once for every point whose cell meets the box `min..=max`
@@ -224,11 +311,19 @@ mod tests {
         points[7] = Vector::new(f32::NAN, 0.2, 0.0);
         let mut hash = SpatialHash::default();
         hash.build(&points, 0.05);
-        for (min, max) in [
-            (Vector::new(0.2, 0.1, -0.5), Vector::new(0.4, 0.3, 0.1)),
-            (Vector::splat(-10.0), Vector::splat(10.0)),
-            (Vector::new(0.9, 0.9, 0.9), Vector::new(0.8, 1.0, 1.0)),
-        ] {
+        // Both scans: AVX2's (where the CPU has it) and the portable one.
+        let portable = SpatialHash {
+            simd: false,
+            ..hash.clone()
+        };
+        for (hash, (min, max)) in [&hash, &portable].into_iter().flat_map(|h| {
+            [
+                (Vector::new(0.2, 0.1, -0.5), Vector::new(0.4, 0.3, 0.1)),
+                (Vector::splat(-10.0), Vector::splat(10.0)),
+                (Vector::new(0.9, 0.9, 0.9), Vector::new(0.8, 1.0, 1.0)),
+            ]
+            .map(|b| (h, b))
+        }) {
             let mut seen = vec![0u32; points.len()];
             hash.for_each_inside(min, max, |i, p| {
                 assert_eq!(
