@@ -7,15 +7,13 @@
 
 use crate::parallel::{Disjoint, Team};
 
-/// Lanes (rows, going back) a thread takes at a time: a multiple of [`BLOCK`].
-const CHUNK: usize = 32;
+/// Rows a thread takes at a time, both ways: a multiple of [`BLOCK`], and
+/// the chains a thread takes at a time along rows (`grid_chains::CHUNK`),
+/// so that a row is copied in, solved and copied back on one thread.
+pub(super) const CHUNK: usize = 32;
 
 /// Side of the blocks transposed in registers (AVX2's 8 `f32`).
 const BLOCK: usize = 8;
-
-/// Side of the tiles the element-by-element copies take: a tile's rows of
-/// lanes and of scratch stay in the first-level cache.
-const TILE: usize = 8;
 
 /// Checks, once a transpose, what its unchecked copies rely on: every
 /// array holds the whole grid, and each lane of a row has its column.
@@ -80,12 +78,13 @@ unsafe fn transpose(
     way: Way,
 ) {
     assert_within(pairs, column, shape);
-    let along = match way {
-        Way::In => shape.0,
-        Way::Out => shape.1,
-    };
-    team.sum_count(along.div_ceil(CHUNK), |q| {
-        let part = q * CHUNK..((q + 1) * CHUNK).min(along);
+    // Both ways a chunk of rows: the rows a band of the sweep holds, on
+    // the thread that holds them (the rows' chains are then solved there;
+    // in by chunks of lanes, every chunk read rows the other thread had
+    // last written).
+    let rows = shape.1;
+    team.sum_count(rows.div_ceil(CHUNK), |q| {
+        let part = q * CHUNK..((q + 1) * CHUNK).min(rows);
         for &(from, to) in pairs {
             let copy = Copy {
                 from: from.as_ptr(),
@@ -93,8 +92,9 @@ unsafe fn transpose(
                 column,
                 shape,
             };
-            // SAFETY: within both arrays (asserted); going in, lane `p`'s
-            // scratch row is this chunk's alone; coming back, row `r`'s lanes.
+            // SAFETY: within both arrays (asserted); going in, the scratch
+            // elements of this chunk's rows are its alone; coming back,
+            // these rows' lanes.
             unsafe { copy_chunk(&copy, part.clone(), way, simd) };
         }
         0
@@ -138,9 +138,9 @@ struct Copy<'a> {
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn in_chunk_avx2(copy: &Copy, lanes: std::ops::Range<usize>) {
+unsafe fn in_chunk_avx2(copy: &Copy, rows: std::ops::Range<usize>) {
     // SAFETY: the caller's promise.
-    unsafe { in_chunk(copy, lanes, true) };
+    unsafe { in_chunk(copy, rows, true) };
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -150,49 +150,47 @@ unsafe fn out_chunk_avx2(copy: &Copy, rows: std::ops::Range<usize>) {
     unsafe { out_chunk(copy, rows, true) };
 }
 
-/// Lanes `lanes` of every row into the scratch: blocks of 8 rows and 8
-/// lanes in registers when `simd`, the rest element by element.
+/// Rows `rows` of the lanes into the scratch: blocks of 8 lanes and 8
+/// rows in registers when `simd`, the rest element by element (the mirror
+/// of [`out_chunk`]).
 ///
 /// # Safety
 /// Every element read and written is within the arrays (the caller
 /// asserted the shape), and this chunk's alone; `simd` only within an
 /// AVX2 function.
 #[inline(always)]
-unsafe fn in_chunk(c: &Copy, lanes: std::ops::Range<usize>, simd: bool) {
-    let (cols, rows) = c.shape;
+unsafe fn in_chunk(c: &Copy, rows: std::ops::Range<usize>, simd: bool) {
+    let (cols, height) = c.shape;
     let col = |p: usize| c.column[p] as usize;
     #[cfg_attr(not(target_arch = "x86_64"), allow(unused_mut))]
-    let mut r0 = 0;
+    let mut p0 = 0;
     #[cfg(target_arch = "x86_64")]
-    while simd && r0 + BLOCK <= rows {
-        let mut p0 = lanes.start;
-        while p0 + BLOCK <= lanes.end {
+    while simd && p0 + BLOCK <= cols {
+        let mut r0 = rows.start;
+        while r0 + BLOCK <= rows.end {
             // SAFETY: rows `r0..r0 + 8` of lanes `p0..p0 + 8`, to the
             // scratch rows of their columns at `r0..r0 + 8`: in bounds.
             unsafe {
                 block(
                     std::array::from_fn(|i| c.from.add((r0 + i) * cols + p0)),
-                    std::array::from_fn(|j| c.to.add(col(p0 + j) * rows + r0)),
+                    std::array::from_fn(|j| c.to.add(col(p0 + j) * height + r0)),
                 )
             };
-            p0 += BLOCK;
+            r0 += BLOCK;
         }
-        for p in p0..lanes.end {
-            for r in r0..r0 + BLOCK {
+        for p in p0..p0 + BLOCK {
+            for r in r0..rows.end {
                 // SAFETY: in bounds, as above.
-                unsafe { *c.to.add(col(p) * rows + r) = *c.from.add(r * cols + p) };
+                unsafe { *c.to.add(col(p) * height + r) = *c.from.add(r * cols + p) };
             }
         }
-        r0 += BLOCK;
+        p0 += BLOCK;
     }
     let _ = simd;
-    for t0 in (r0..rows).step_by(TILE) {
-        let t1 = (t0 + TILE).min(rows);
-        for p in lanes.clone() {
-            for r in t0..t1 {
-                // SAFETY: in bounds, as above.
-                unsafe { *c.to.add(col(p) * rows + r) = *c.from.add(r * cols + p) };
-            }
+    for p in p0..cols {
+        for r in rows.clone() {
+            // SAFETY: in bounds, as above.
+            unsafe { *c.to.add(col(p) * height + r) = *c.from.add(r * cols + p) };
         }
     }
 }

@@ -36,6 +36,10 @@ use super::staggered::Staggered;
 /// that a 128-column grid gives two threads two chunks each.
 const CHUNK: usize = 32;
 
+// The rows' chains are copied in and back a chunk of rows at a time, the
+// same rows on the same thread as their solve.
+const _: () = assert!(CHUNK == super::chain_transpose::CHUNK);
+
 /// Below this many springs in a direction, its chunks run on one thread.
 const PARALLEL_MIN_SPRINGS: usize = 4096;
 
