@@ -171,7 +171,7 @@ impl SpatialHash {
         while k < bucket.end {
             // Lanes past the bucket's end read the next bucket or the pad,
             // and are masked off.
-            let left = _mm256_set1_epi32((bucket.end - k) as i32);
+            let left = _mm256_set1_epi32((bucket.end - k).min(PAD) as i32);
             let mut keep = _mm256_castsi256_ps(_mm256_cmpgt_epi32(left, lane));
             for a in 0..3 {
                 let cells = self.entry_cells[a].as_ptr().add(k) as *const __m256i;
