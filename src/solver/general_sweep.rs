@@ -189,28 +189,21 @@ impl Job<'_> {
         let k = Eights::new(k);
         let mut s = class.start;
         while s + W <= class.end {
-            self.solve_eight(s, p, lambda, &k).store(p);
+            self.eight(s, p, lambda, &k);
             s += W;
         }
         s
     }
 
-    /// Springs `s..s + 8` of one colour class solved: their multipliers
-    /// updated in `lambda`, their ends' new positions returned (not yet
-    /// stored in `p`).
+    /// Springs `s..s + 8` of one colour class projected: their multipliers
+    /// updated in `lambda`, their ends moved in `p`.
     ///
     /// # Safety
     /// The CPU has AVX2 (inlined into [`Job::eights_avx2`], which is compiled
     /// for it); the springs' ends are particles of `p` (`now` and `start`).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn solve_eight(
-        &self,
-        s: usize,
-        p: &PackedParticles,
-        lambda: &mut [f32],
-        k: &Eights,
-    ) -> Moved {
+    unsafe fn eight(&self, s: usize, p: &mut PackedParticles, lambda: &mut [f32], k: &Eights) {
         use std::arch::x86_64::*;
         const W: usize = 8;
         let Eights {
@@ -279,18 +272,16 @@ impl Job<'_> {
         let keep = |old, new| _mm256_blendv_ps(old, new, on);
         _mm256_storeu_ps(lambda[s..s + W].as_mut_ptr(), keep(l, _mm256_add_ps(l, dl)));
         let (si, sj) = (_mm256_mul_ps(wi, dl), _mm256_mul_ps(wj, dl));
-        Moved {
-            i,
-            j,
-            xyz: [
-                keep(xi, _mm256_sub_ps(xi, _mm256_mul_ps(nx, si))),
-                keep(yi, _mm256_sub_ps(yi, _mm256_mul_ps(ny, si))),
-                keep(zi, _mm256_sub_ps(zi, _mm256_mul_ps(nz, si))),
-                keep(xj, _mm256_add_ps(xj, _mm256_mul_ps(nx, sj))),
-                keep(yj, _mm256_add_ps(yj, _mm256_mul_ps(ny, sj))),
-                keep(zj, _mm256_add_ps(zj, _mm256_mul_ps(nz, sj))),
-            ],
-        }
+        let moved = [
+            keep(xi, _mm256_sub_ps(xi, _mm256_mul_ps(nx, si))),
+            keep(yi, _mm256_sub_ps(yi, _mm256_mul_ps(ny, si))),
+            keep(zi, _mm256_sub_ps(zi, _mm256_mul_ps(nz, si))),
+            keep(xj, _mm256_add_ps(xj, _mm256_mul_ps(nx, sj))),
+            keep(yj, _mm256_add_ps(yj, _mm256_mul_ps(ny, sj))),
+            keep(zj, _mm256_add_ps(zj, _mm256_mul_ps(nz, sj))),
+        ];
+        rows(&mut p.now, &i, [moved[0], moved[1], moved[2], zero]);
+        rows(&mut p.now, &j, [moved[3], moved[4], moved[5], zero]);
     }
 }
 
@@ -319,32 +310,6 @@ impl Eights {
             zero: _mm256_setzero_ps(),
             tiny: _mm256_set1_ps(f32::MIN_POSITIVE),
         }
-    }
-}
-
-/// 8 springs' ends (`i`, `j`) and their new positions (m): x, y, z of the
-/// `i` ends, then of the `j` ends.
-#[cfg(target_arch = "x86_64")]
-struct Moved {
-    i: [usize; 8],
-    j: [usize; 8],
-    xyz: [std::arch::x86_64::__m256; 6],
-}
-
-#[cfg(target_arch = "x86_64")]
-impl Moved {
-    /// Writes the new positions into `p`.
-    ///
-    /// # Safety
-    /// The CPU has AVX2 (inlined into [`Job::eights_avx2`]); the ends are
-    /// particles of `p`.
-    #[inline(always)]
-    unsafe fn store(self, p: &mut PackedParticles) {
-        use std::arch::x86_64::*;
-        let zero = _mm256_setzero_ps();
-        let [xi, yi, zi, xj, yj, zj] = self.xyz;
-        rows(&mut p.now, &self.i, [xi, yi, zi, zero]);
-        rows(&mut p.now, &self.j, [xj, yj, zj, zero]);
     }
 }
 
