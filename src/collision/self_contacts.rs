@@ -326,9 +326,9 @@ impl SelfContacts {
         let n = x.len().max(1) as f32;
         let moved = x.iter().zip(&look.at).map(|(&x, &at)| x - at);
         // Two particles closed in by at most the diagonal of the box
-        // around every motion: a cloth falling onto a still one (the
-        // `stack`) has moved its whole fall by then, against two thirds of
-        // it from the mean of both.
+        // around every motion: one of the `stack`'s three cloths falling
+        // onto the others has closed in by its fall, where twice its
+        // particles' distance from the mean motion counts 4/3 of it.
         let (mut lo, mut hi, mut sum) = (Vector::INFINITY, Vector::NEG_INFINITY, Vector::ZERO);
         for d in moved.clone() {
             if !d.is_finite() {
