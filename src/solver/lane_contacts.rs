@@ -360,6 +360,24 @@ struct Law<'a> {
 }
 
 impl Law<'_> {
+    /// Checks that every cuboid's planes hold lanes `0..end` (the plane
+    /// arrays all one length, each slot's `end` lanes within it): then a
+    /// step of lanes below `end` may load them unchecked.
+    #[inline]
+    fn check_planes(&self, end: usize) {
+        let [px, py, pz, po] = self.planes;
+        let len = po.len();
+        assert!([px.len(), py.len(), pz.len()] == [len; 3]);
+        for shape in self.shapes {
+            if let StillShape::Cuboid(cuboid) = shape {
+                assert!(
+                    cuboid.slot * self.lanes + end <= len,
+                    "a cuboid's planes for its lanes"
+                );
+            }
+        }
+    }
+
     /// The plane (normal, offset) of lane `i` in `slot`.
     #[inline(always)]
     fn plane(&self, slot: usize, i: usize) -> ([f32; 3], f32) {
@@ -434,6 +452,11 @@ unsafe fn run_avx2(mut chunk: Chunk, law: &Law) -> f32 {
     use std::arch::x86_64::*;
     let n = chunk.len();
     let whole = n - n % W;
+    // Once a chunk, for the steps' unchecked loads of the cuboids' planes
+    // (checked in every step, the comparison of the arrays' lengths went
+    // through the stack and stalled on store forwarding: half of this
+    // pass on the `box`).
+    law.check_planes(chunk.first + whole);
     let mut far = _mm256_setzero_ps();
     for k in (0..whole).step_by(W) {
         eight_avx2(&mut chunk, k, law, &mut far);
@@ -449,6 +472,10 @@ unsafe fn run_avx2(mut chunk: Chunk, law: &Law) -> f32 {
 /// so the same bits; keeps in `far` the farthest push of each lane.
 /// Writes nothing where no lane is inside a shape nor (with friction)
 /// was pushed this substep: the pass would leave every bit as it is.
+///
+/// # Safety
+/// The CPU has AVX2, and [`Law::check_planes`] held for lanes up to
+/// `c.first + k + 8`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x86_64::__m256) {
@@ -515,9 +542,13 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
             }
             StillShape::Cuboid(cuboid) => {
                 // This lane's plane, taken at the substep's start.
+                // SAFETY: within every plane array, checked once a chunk
+                // (`Law::check_planes`).
                 let at = cuboid.slot * law.lanes + c.first + k;
                 let [px, py, pz, po] = law.planes;
-                assert!(at + W <= po.len() && [px.len(), py.len(), pz.len()] == [po.len(); 3]);
+                debug_assert!(
+                    at + W <= po.len() && [px.len(), py.len(), pz.len()] == [po.len(); 3]
+                );
                 let m = [
                     _mm256_loadu_ps(px.as_ptr().add(at)),
                     _mm256_loadu_ps(py.as_ptr().add(at)),
