@@ -393,6 +393,25 @@ impl GridPlan {
         (rest, [rows, cols])
     }
 
+    /// Calls `f` on every run of stretch and shear springs (those the
+    /// collision stage's edge pass keeps out of obstacles), each spring
+    /// once: the lanes of its first ends `a..a + len` and of its second
+    /// ends `b..b + len` (among all lanes). Runs hold springs only.
+    pub fn for_each_edge_run(&self, mut f: impl FnMut((usize, usize, usize))) {
+        for region in self.phases.iter().flatten() {
+            let base = region.lanes.start;
+            for (p, pass) in self.passes.iter().enumerate() {
+                if pass.kind == SpringKind::Bend {
+                    continue;
+                }
+                for seg in &region.runs[p] {
+                    let (a, b) = (base + seg.a as usize, base + seg.b as usize);
+                    f((a, b, seg.len as usize));
+                }
+            }
+        }
+    }
+
     /// The lanes of the particles `range` (whole rows: each in `range` too).
     pub fn lanes_of(&self, range: &std::ops::Range<usize>) -> &[u32] {
         &self.lane[range.clone()]

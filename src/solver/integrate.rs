@@ -91,7 +91,7 @@ pub(crate) fn integrate(
             };
             SubstepOutcome {
                 stretch_room: outcome.stretch_room,
-                contacts_held: outcome.contacts_held && !outcome.wants_stage,
+                contacts_held: outcome.contacts_held,
                 touching: outcome.touching,
                 friction,
                 ..explicit(0)

@@ -26,16 +26,19 @@
 //! the point nearest to where the lane started the substep, found once a
 //! substep ([`LaneContacts::take_planes`]), as the collision stage's
 //! contact planes did: a lane pulled over an edge stays on the face it was
-//! on. The lanes do not see the springs between particles, which may cut
-//! a cuboid's edge: there the collision stage's edge pass still runs every
-//! second substep (`xpbd::CUBOID_STAGE_EVERY`). The `box` went from 9.0 to
-//! 5.9 ms a frame so, its peak stretch from 5.20% to 4.78%.
+//! on. The `box` went from 9.0 to 5.9 ms a frame so, its peak stretch
+//! from 5.20% to 4.78%. A spring between two particles held out may still
+//! cut a cuboid's edge: the lanes keep the springs off the edges too,
+//! every second substep, as the collision stage's edge pass does
+//! ([`LaneContacts::keep_springs_off_cuboids`], `xpbd::CUBOID_EDGES_EVERY`);
+//! the stage ran every second substep for that before, and the state left
+//! the lanes for it (`box` 6.4 → 4.4 ms, bench, one thread).
 
 use crate::collision::{chords_clear_ball, Obstacle};
 use crate::math::{simd_available, Vector};
 use crate::parallel::{Disjoint, Team};
 
-use super::grid_sweep::Lanes;
+use super::grid_sweep::{GridPlan, Lanes};
 
 /// Lanes per chunk of a pass, a chunk to a thread.
 const CHUNK: usize = 2048;
@@ -104,6 +107,9 @@ pub(crate) struct LaneContacts {
     planes: [Vec<f32>; 4],
     /// Lanes of the substep.
     lanes: usize,
+    /// Per lane, for the cuboid [`Self::keep_springs_off_cuboids`] is at:
+    /// the faces it is beyond by the margin ([`StillCuboid::faces_beyond`]).
+    faces: Vec<u8>,
 }
 
 impl LaneContacts {
@@ -242,6 +248,70 @@ impl LaneContacts {
                 0.0
             });
         }
+    }
+
+    /// Keeps the stretch and shear springs of `plan` at least half the
+    /// thickness out of every cuboid the lanes hold, as the collision
+    /// stage's edge pass does (`collision/edges.rs`): the lanes hold each
+    /// particle out of a cuboid, but a spring between two of them may
+    /// still cut one of its edges or corners. A spring whose two ends are
+    /// beyond one face (by that margin) lies beyond it whole, and is
+    /// passed over by one test of two lanes' marks (almost all of them:
+    /// a sheet on a cube cuts only where it wraps its edges); the others
+    /// are sampled at a quarter, a half and three quarters, and each
+    /// sample within the margin is pushed out along the cuboid's normal
+    /// there, the ends by their share and inverse masses, one spring after
+    /// another. A spring with a pinned end inside the cuboid is left (it
+    /// cannot be put out). One thread: the springs it samples are few.
+    /// Returns the farthest it moved a lane (m).
+    pub fn keep_springs_off_cuboids(&mut self, plan: &GridPlan, lanes: &mut Lanes) -> f32 {
+        let n = self.lanes;
+        let [x, y, z, _, _, _, w] = lanes.arrays_mut();
+        if [x.len(), y.len(), z.len(), w.len()] != [n; 4] {
+            return 0.0;
+        }
+        let mut farthest = 0.0f32;
+        for shape in &self.shapes {
+            let StillShape::Cuboid(cuboid) = *shape else {
+                continue;
+            };
+            let margin = 0.5 * cuboid.thickness;
+            let faces = &mut self.faces;
+            faces.clear();
+            faces.resize(n, 0);
+            cuboid.mark_faces_beyond([&x[..], &y[..], &z[..]], margin, faces);
+            plan.for_each_edge_run(|(a, b, len)| {
+                // Once a run, for the loops' indexing.
+                if a.max(b) + len > n || faces.len() != n {
+                    return;
+                }
+                // The springs to sample, found 32 at a time without a
+                // branch (a spring at a time, the test was a tenth of the
+                // `box`'s frame). A run's springs share no lane, so what
+                // one spring's push changes cannot make another of the
+                // same run due.
+                for first in (0..len).step_by(32) {
+                    let count = (len - first).min(32);
+                    let mut due = apart_from_faces(&faces[a + first..], &faces[b + first..], count);
+                    while due != 0 {
+                        let i = due.trailing_zeros() as usize;
+                        due &= due - 1;
+                        let (a, b) = (a + first + i, b + first + i);
+                        let (mut pa, mut pb) = ([x[a], y[a], z[a]], [x[b], y[b], z[b]]);
+                        let moved =
+                            cuboid.keep_spring_off((&mut pa, w[a]), (&mut pb, w[b]), margin);
+                        if moved > 0.0 {
+                            farthest = farthest.max(moved);
+                            (x[a], y[a], z[a]) = (pa[0], pa[1], pa[2]);
+                            (x[b], y[b], z[b]) = (pb[0], pb[1], pb[2]);
+                            faces[a] = cuboid.faces_beyond(pa, margin);
+                            faces[b] = cuboid.faces_beyond(pb, margin);
+                        }
+                    }
+                }
+            });
+        }
+        farthest
     }
 
     /// Whether the lanes hold a cuboid this substep.
@@ -982,6 +1052,161 @@ impl StillCuboid {
     }
 }
 
+/// Bit `i` set for each `i < count` (at most 32) where `fa[i]` and `fb[i]`
+/// share no face (the spring between them may come near the cuboid): on
+/// x86-64 sixteen at a time in SSE2 (which every such CPU has).
+#[inline(always)]
+fn apart_from_faces(fa: &[u8], fb: &[u8], count: usize) -> u32 {
+    let (fa, fb) = (&fa[..count], &fb[..count]);
+    let mut due = 0u32;
+    let mut i = 0;
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        while i + 16 <= count {
+            // SAFETY: bytes `i..i + 16` are within both (checked above);
+            // SSE2 is part of x86-64.
+            let shared = unsafe {
+                let a = _mm_loadu_si128(fa.as_ptr().add(i) as *const __m128i);
+                let b = _mm_loadu_si128(fb.as_ptr().add(i) as *const __m128i);
+                _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_and_si128(a, b), _mm_setzero_si128()))
+            };
+            due |= (shared as u32) << i;
+            i += 16;
+        }
+    }
+    while i < count {
+        due |= u32::from(fa[i] & fb[i] == 0) << i;
+        i += 1;
+    }
+    due
+}
+
+/// Where along a spring [`LaneContacts::keep_springs_off_cuboids`] samples
+/// it: as the collision stage's edge pass (`collision/edges.rs`).
+const EDGE_SAMPLES: [f32; 3] = [0.25, 0.5, 0.75];
+
+impl StillCuboid {
+    /// The faces `p` (m) is at least `margin` (m) beyond: bit `2a` for the
+    /// face on the positive side of axis `a`, bit `2a + 1` for the
+    /// negative. A segment whose two ends share a bit lies beyond that
+    /// face whole, at least `margin` out of the cuboid. Without a branch.
+    #[inline(always)]
+    fn faces_beyond(&self, p: [f32; 3], margin: f32) -> u8 {
+        let d = [
+            p[0] - self.centre.x,
+            p[1] - self.centre.y,
+            p[2] - self.centre.z,
+        ];
+        let half = [self.half.x, self.half.y, self.half.z];
+        let mut bits = 0u8;
+        for a in 0..3 {
+            let axis = self.axes[a];
+            let local = axis.x * d[0] + axis.y * d[1] + axis.z * d[2];
+            let out = half[a] + margin;
+            bits |= u8::from(local >= out) << (2 * a);
+            bits |= u8::from(local <= -out) << (2 * a + 1);
+        }
+        bits
+    }
+
+    /// [`Self::faces_beyond`] for every lane at `p` (m), into `faces`
+    /// (one loop the compiler vectorises: a lane at a time it was a tenth
+    /// of the `box`'s frame).
+    fn mark_faces_beyond(&self, p: [&[f32]; 3], margin: f32, faces: &mut [u8]) {
+        let n = faces.len();
+        let [x, y, z] = p.map(|a| &a[..n]);
+        for k in 0..n {
+            faces[k] = self.faces_beyond([x[k], y[k], z[k]], margin);
+        }
+    }
+
+    /// Whether `p` (m) is surely at least `margin` (m) out of the cuboid
+    /// (outside it by the square of its distance: no root).
+    #[inline(always)]
+    fn surely_beyond(&self, p: [f32; 3], margin: f32) -> bool {
+        let (_, beyond) = self.local(p);
+        let over = beyond.map(|b| b.max(0.0));
+        over[0] * over[0] + over[1] * over[1] + over[2] * over[2] >= margin * margin
+    }
+
+    /// The signed distance (m, negative inside) of `p` (m) from the
+    /// cuboid itself (not rounded), and the outward unit normal there:
+    /// outside, from the nearest point of the surface; inside, of the
+    /// nearest face (the first of equals).
+    fn signed_distance(&self, p: [f32; 3]) -> (f32, [f32; 3]) {
+        let (local, beyond) = self.local(p);
+        let over = beyond.map(|b| b.max(0.0));
+        let dist2 = over[0] * over[0] + over[1] * over[1] + over[2] * over[2];
+        let mut normal_local = [0.0f32; 3];
+        let distance = if dist2 > 0.0 {
+            let dist = dist2.sqrt();
+            for a in 0..3 {
+                normal_local[a] = (over[a] / dist).copysign(local[a]);
+            }
+            dist
+        } else {
+            let face = if beyond[0] >= beyond[1] && beyond[0] >= beyond[2] {
+                0
+            } else if beyond[1] >= beyond[2] {
+                1
+            } else {
+                2
+            };
+            normal_local[face] = 1.0f32.copysign(local[face]);
+            beyond[face]
+        };
+        let [u, v, w] = self.axes;
+        let normal = u * normal_local[0] + v * normal_local[1] + w * normal_local[2];
+        (distance, [normal.x, normal.y, normal.z])
+    }
+
+    /// The collision stage's edge pass on one spring against this cuboid
+    /// (`CollisionStage::resolve_spring`): its ends at `pa` and `pb` (m,
+    /// inverse masses `wa`, `wb`) moved so that its samples lie at least
+    /// `margin` (m) out of it. Returns the farthest it moved an end (m).
+    fn keep_spring_off(
+        &self,
+        (pa, wa): (&mut [f32; 3], f32),
+        (pb, wb): (&mut [f32; 3], f32),
+        margin: f32,
+    ) -> f32 {
+        if wa == 0.0 && wb == 0.0 {
+            return 0.0;
+        }
+        // A pinned end held inside cannot be moved out: pushing the free
+        // end would only shove it about.
+        let pinned_inside = |p: [f32; 3], w: f32| w == 0.0 && self.signed_distance(p).0 < 0.0;
+        if pinned_inside(*pa, wa) || pinned_inside(*pb, wb) {
+            return 0.0;
+        }
+        let mut farthest = 0.0f32;
+        for t in EDGE_SAMPLES {
+            let sample: [f32; 3] = std::array::from_fn(|c| pa[c] * (1.0 - t) + pb[c] * t);
+            if self.surely_beyond(sample, margin) {
+                continue;
+            }
+            let (distance, normal) = self.signed_distance(sample);
+            // Not a number: nothing known to push by.
+            if !(distance < margin) {
+                continue;
+            }
+            let (ca, cb) = ((1.0 - t) * wa, t * wb);
+            let denom = (1.0 - t) * ca + t * cb;
+            if denom <= 0.0 {
+                continue;
+            }
+            let push = (margin - distance) / denom;
+            for c in 0..3 {
+                pa[c] += normal[c] * (push * ca);
+                pb[c] += normal[c] * (push * cb);
+            }
+            farthest = farthest.max(push * ca.max(cb));
+        }
+        farthest
+    }
+}
+
 /// The point of `cuboid` rounded by its thickness nearest to `p` (m), and
 /// the outward normal there: outside the cuboid, through the nearest point
 /// of its surface; in it, out through the nearest face (the lanes hold a
@@ -1627,6 +1852,118 @@ mod tests {
     }
 
     /// The one cuboid the lanes hold.
+    /// A sheet folded over a turned cuboid's edge, each particle the
+    /// thickness out of it: the springs across the edge cut its rounding.
+    /// The lanes' edge pass puts every stretch and shear spring's samples
+    /// back to half the thickness out (as the collision stage's edge pass
+    /// would), moves no lane of a spring beyond a face, no pinned lane, and
+    /// leaves a spring whose pinned end is inside the cuboid.
+    #[test]
+    fn springs_over_a_cuboids_edge_are_put_off_it() {
+        use crate::cloth::{ClothBuilder, SpringKind};
+        let turn = glam::Quat::from_rotation_z(0.2) * glam::Quat::from_rotation_y(0.4);
+        let pose = Pose::from_parts(Vector::new(0.1, 0.7, -0.2), turn);
+        let half = Vector::new(0.3, 0.2, 0.25);
+        let table = Obstacle::cuboid(half, pose);
+        let (cols, rows, spacing) = (12, 8, 0.02);
+        let cloth = ClothBuilder::new(cols, rows).build().unwrap();
+        let plan = GridPlan::new(cloth.grid().unwrap(), cloth.springs()).unwrap();
+        let n = cols * rows;
+        let mut contacts = LaneContacts::default();
+        assert!(contacts.begin(std::slice::from_ref(&table), (THICKNESS, 0.001), n));
+        // Over the +x edge of the top face: columns before the edge lie on
+        // the top, those after hang down the side; one particle of the
+        // row 2 pinned on the top, one of row 5 pinned inside the cuboid.
+        let pinned_top = cloth.index(2, 3).unwrap();
+        let pinned_in = cloth.index(5, 6).unwrap();
+        let mut l = Lanes::default();
+        l.resize(n);
+        {
+            let [x, y, z, _, _, _, w] = l.arrays_mut();
+            for r in 0..rows {
+                for c in 0..cols {
+                    let i = cloth.index(r, c).unwrap();
+                    let u = (c as f32 - 5.5) * spacing;
+                    let across = (r as f32 - 3.5) * spacing;
+                    let local = if u < 0.0 {
+                        Vector::new(half.x + u, half.y + THICKNESS, across)
+                    } else {
+                        Vector::new(half.x + THICKNESS, half.y - u, across)
+                    };
+                    let local = if i == pinned_in {
+                        Vector::new(half.x - 0.01, half.y - 0.01, across)
+                    } else {
+                        local
+                    };
+                    let p = pose.transform_point(local);
+                    let k = plan.lane(i);
+                    (x[k], y[k], z[k]) = (p.x, p.y, p.z);
+                    w[k] = if i == pinned_top || i == pinned_in { 0.0 } else { 1.0 };
+                }
+            }
+        }
+        let springs = cloth.springs();
+        let edge_springs = || {
+            springs
+                .range(SpringKind::Stretch)
+                .chain(springs.range(SpringKind::Shear))
+                .map(|s| (plan.lane(springs.a[s] as usize), plan.lane(springs.b[s] as usize)))
+        };
+        let distance = |p: Vector| {
+            contact_prepared(
+                &*table.shape,
+                Analytic::of(&*table.shape),
+                &PoseF64::of(&table.pose),
+                p,
+            )
+            .unwrap()
+            .signed_distance
+        };
+        // The least of a spring's samples' distances to the cuboid (m).
+        let least = |l: &mut Lanes, (a, b): (usize, usize)| {
+            let [x, y, z, ..] = l.arrays_mut();
+            let (pa, pb) = (
+                Vector::new(x[a], y[a], z[a]),
+                Vector::new(x[b], y[b], z[b]),
+            );
+            EDGE_SAMPLES
+                .iter()
+                .map(|&t| distance(pa * (1.0 - t) + pb * t))
+                .fold(f32::INFINITY, f32::min)
+        };
+        let margin = 0.5 * THICKNESS;
+        let inside = |(a, b): (usize, usize)| [a, b].contains(&plan.lane(pinned_in));
+        let cut_before = edge_springs()
+            .filter(|&s| !inside(s) && least(&mut l, s) < 0.5 * margin)
+            .count();
+        assert!(cut_before >= rows, "{cut_before} springs cut the edge");
+        let before = bits(&mut l);
+        let moved = contacts.keep_springs_off_cuboids(&plan, &mut l);
+        assert!(moved > 0.0);
+        let after = bits(&mut l);
+        let lane_moved = |k: usize| (0..3).any(|a| before[a * n + k] != after[a * n + k]);
+        for s in edge_springs() {
+            let d = least(&mut l, s);
+            if inside(s) {
+                // Left: its pinned end cannot be put out.
+                assert!(d < 0.0, "spring {s:?} {d} m out");
+                continue;
+            }
+            assert!(d > 0.9 * margin, "spring {s:?} {d} m out");
+        }
+        for r in 0..rows {
+            for c in 0..cols {
+                let i = cloth.index(r, c).unwrap();
+                let k = plan.lane(i);
+                // Pinned lanes stay; so do lanes two columns or more from
+                // the edge, whose springs all lie beyond one face.
+                if i == pinned_top || i == pinned_in || !(4..=7).contains(&c) {
+                    assert!(!lane_moved(k), "lane of ({r}, {c}) moved");
+                }
+            }
+        }
+    }
+
     fn cuboid_of(contacts: &LaneContacts) -> StillCuboid {
         match contacts.shapes[..] {
             [StillShape::Cuboid(c)] => c,

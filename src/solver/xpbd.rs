@@ -107,11 +107,6 @@ pub(crate) struct XpbdOutcome {
     /// ([`LaneContacts::holds`]): the collision stage may wait for the
     /// step's last substep.
     pub contacts_held: bool,
-    /// The lanes held the contacts (and gave them friction), but the
-    /// collision stage must still run after this substep (for its edge
-    /// pass among cuboids, [`CUBOID_STAGE_EVERY`]): the state is back in
-    /// the particles' arrays.
-    pub wants_stage: bool,
     /// At the step's last substep, when the lanes held the contacts: the
     /// particles they pushed out of an obstacle in it (0 otherwise).
     pub touching: u32,
@@ -300,6 +295,15 @@ pub(crate) fn step(
             // 128 peaked at 5.12% so, 4.84% this way; 4.90% with the
             // collision stage's friction every substep).
             contacts.project_with_friction(l, team);
+            // The springs off a cuboid's edges and corners every
+            // `CUBOID_EDGES_EVERY` substeps, before the limit takes back
+            // what that stretched.
+            if held
+                && contacts.holds_cuboid()
+                && (sub.ctx.substep + 1).is_multiple_of(CUBOID_EDGES_EVERY)
+            {
+                contacts.keep_springs_off_cuboids(plan, l);
+            }
             let mut room = hold_limit(plan, l, model.stretch_limit, team);
             if contacts.holds_cuboid() {
                 // A cuboid's planes against the limit, as the collision
@@ -320,19 +324,13 @@ pub(crate) fn step(
             // 4.76% without; N = 64 4.53% either way).
             let last = sub.ctx.substep + 1 == sub.ctx.substeps;
             let pushed = if last { contacts.project(l, team) } else { 0.0 };
-            // Among cuboids the collision stage still runs every
-            // `CUBOID_STAGE_EVERY` substeps, for its edge pass.
-            let wants_stage = held
-                && !last
-                && contacts.holds_cuboid()
-                && (sub.ctx.substep + 1).is_multiple_of(CUBOID_STAGE_EVERY);
             let room = room
                 .map(|room| room - 2.0 * pushed)
                 .filter(|&room| room > 0.0);
             // Velocities from the motion: the predicted velocity plus the
             // sweeps' correction over `h`, the prediction being the start
             // plus `h` times it (as `predict` made it, to the bit).
-            let stay = held && may_stay && !wants_stage;
+            let stay = held && may_stay;
             let lanes = l.disjoint();
             let [vx, vy, vz] = vel.each_mut().map(|c| Disjoint::new(&mut c[..]));
             if stay {
@@ -395,7 +393,6 @@ pub(crate) fn step(
             XpbdOutcome {
                 stretch_room: room,
                 contacts_held: held,
-                wants_stage,
                 touching: if held && last { contacts.touching() } else { 0 },
             }
         }
@@ -423,7 +420,6 @@ pub(crate) fn step(
             XpbdOutcome {
                 stretch_room: None,
                 contacts_held: false,
-                wants_stage: false,
                 touching: 0,
             }
         }
@@ -584,24 +580,26 @@ fn hold_limit(plan: &mut GridPlan, lanes: &mut Lanes, factor: f32, team: Team) -
 /// sweeps, where the lanes hold a cuboid (its planes): each pushes the
 /// lanes back out and holds the limit again. Measured on `box` (a 64 × 64
 /// cotton sheet dropped on a cube, 32 substeps, peak stretch over 120
-/// frames), with the collision stage every [`CUBOID_STAGE_EVERY`]
-/// substeps: 7.33% with none, 5.71% with two, 5.08% with four, 4.82%
+/// frames), with the collision stage every second substep: 7.33% with none, 5.71% with two, 5.08% with four, 4.82%
 /// with six (ms a frame 5.7, 6.8, 6.4, 6.7: the rounds stop early).
 /// The collision stage held the cube through contact planes after every
 /// substep before: 5.30% and 9.1 ms.
 const CUBOID_ROUNDS: u32 = 6;
 
-/// How often (in substeps) the collision stage runs while the lanes hold a
-/// cuboid: the lanes keep every particle out of it, but not the springs
-/// between them off its edges, and the stage's edge pass at the step's
-/// last substep alone had to undo a whole step of springs cutting the
-/// edges, which stretched them (a 48 × 48 tablecloth on a table,
-/// `tests/user_drops.rs`: 4.51% before that pass, 5.66% after it).
-/// Measured, tablecloth peak and `box` (32 substeps) ms a frame and peak:
-/// after every substep 4.59%, 8.4 ms, 4.79%; every second 4.56%, 6.7 ms,
-/// 4.82%; every third 5.39%, 5.9 ms; every fourth 5.57%; at the last two
-/// or four substeps of a step, 5.47% and 5.32%.
-const CUBOID_STAGE_EVERY: u32 = 2;
+/// How often (in substeps) the lanes keep the springs off the edges and
+/// corners of the cuboids they hold
+/// ([`LaneContacts::keep_springs_off_cuboids`]): the lanes keep every
+/// particle out of a cuboid, but not the springs between them off its
+/// edges, and the collision stage's edge pass at the step's last substep
+/// alone had to undo a whole step of springs cutting them, which
+/// stretched them (a 48 × 48 tablecloth on a table, `tests/user_drops.rs`,
+/// peaks at 5.66% so). Measured, tablecloth peak and `box` (32 substeps,
+/// bench, one thread) ms a frame and peak: every substep 4.51%, 4.74 ms,
+/// 4.78%; every second 4.51%, 4.36 ms, 4.77%; every third 4.64%, 4.20 ms;
+/// every fourth 4.60%, 4.20 ms. The collision stage's edge pass did it
+/// every second substep before, with its particle pass and stretch hold
+/// (the state out of the lanes and back): 4.56%, 6.4 ms, 4.78%.
+const CUBOID_EDGES_EVERY: u32 = 2;
 
 /// The farthest push (m) of a round of [`CUBOID_ROUNDS`] under which the
 /// rounds stop: it lengthens a spring by at most twice that (0.13% of the
