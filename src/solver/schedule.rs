@@ -435,11 +435,27 @@ const TEAM_MIN_PARTICLES: usize = 2048;
 /// particles the collision stage's blocks moved on the other came back to
 /// it every substep (the torn sheet, 64 × 32 and 128 × 64: 3.0 → 3.4 and
 /// 31 → 34 ms a frame with two threads, its serial sweep the slower).
+///
+/// A grid cloth without self-collision shares the small-steps solver's
+/// step from [`XPBD_TEAM_MIN_PARTICLES`] particles.
 fn shares_well(cloth: &Cloth, integrator: Integrator) -> bool {
-    let serial =
-        integrator == Integrator::Xpbd && cloth.grid().is_none() && !cloth.params.self_collision;
-    cloth.particle_count() >= TEAM_MIN_PARTICLES && !serial
+    let n = cloth.particle_count();
+    if integrator == Integrator::Xpbd && !cloth.params.self_collision {
+        return cloth.grid().is_some() && n >= XPBD_TEAM_MIN_PARTICLES;
+    }
+    n >= TEAM_MIN_PARTICLES
 }
+
+/// Particles from which the small-steps solver shares the step of a grid
+/// cloth without self-collision among threads: each of its substep's
+/// passes over the lanes is too short below to pay for the handouts and
+/// for the lanes moving between the cores. Measured, ms a frame on one
+/// and on two threads (bench, medians): the drape at N = 64 0.89 / 1.13,
+/// 80 1.47 / 1.89, 96 2.29 / 2.47, 112 3.51 / 3.12, 128 4.97 / 3.99; the
+/// `box` at N = 64 4.32 / 4.66. (Self-collision's looks gain from a
+/// second thread at any size: `fold` 48 × 48 9.0 / 7.4, `stack` 31.3 /
+/// 25.9.)
+const XPBD_TEAM_MIN_PARTICLES: usize = 10_000;
 
 /// Puts the cloth back as it was at the start of the step.
 fn restore(cloth: &mut Cloth, ws: &super::workspace::Workspace) {
