@@ -772,13 +772,38 @@ fn sweep_region<const ZERO: bool, const KEPT: bool>(
 /// correction across the cloth, and then only some springs still move).
 /// When such a pass shortens nothing, the room is 0: the pass before
 /// shortened a spring to its limit.
+///
+/// With `planes` (the second of `limit`, the first being `factor`), each
+/// lane a spring moved is put back onto its planes there (when behind one
+/// and free) in the same step: the limit and the lanes' contacts with
+/// cuboids then meet over their edges in one call.
 pub(crate) fn limit_stretch(
     plan: &mut GridPlan,
     lanes: &mut Lanes,
-    factor: f32,
+    limit: (f32, Option<LanePlanes>),
     team: Team,
 ) -> LimitOutcome {
-    limit_stretch_with(plan, lanes, factor, team, simd_available())
+    limit_stretch_with(plan, lanes, limit, team, simd_available())
+}
+
+/// Per lane, the planes that hold it, one in each of `slots` blocks of
+/// `lanes` entries (unit normal x, y, z and offset, m: the lane stays
+/// where `normal · x ≥ offset`; an offset of −∞ for none), as the lanes'
+/// contacts take their cuboids' (`lane_contacts.rs`).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LanePlanes<'a> {
+    pub arrays: [&'a [f32]; 4],
+    pub slots: usize,
+    pub lanes: usize,
+}
+
+impl LanePlanes<'_> {
+    /// Whether every array holds its slots of lanes.
+    fn whole(&self) -> bool {
+        self.arrays
+            .iter()
+            .all(|a| a.len() == self.slots * self.lanes)
+    }
 }
 
 /// What [`limit_stretch`] did.
@@ -863,10 +888,12 @@ const LIMIT_OVER_RELAXATION: f32 = 1.5;
 fn limit_stretch_with(
     plan: &mut GridPlan,
     lanes: &mut Lanes,
-    factor: f32,
+    (factor, planes): (f32, Option<LanePlanes>),
     team: Team,
     simd: bool,
 ) -> LimitOutcome {
+    // Planes for every lane, or none at all.
+    let planes = planes.filter(|p| p.whole() && p.lanes == plan.lane.len());
     if !factor.is_finite() {
         return LimitOutcome {
             shortened: 0,
@@ -938,6 +965,7 @@ fn limit_stretch_with(
                     let mut marks = LimitMarks {
                         moved,
                         pass: number,
+                        planes: planes.map(|p| (p, region.lanes.start)),
                     };
                     for &(p, rest) in limits {
                         let rest = &rest[region.lanes.clone()];
@@ -1029,6 +1057,9 @@ unsafe fn limit_runs_avx2(
 struct LimitMarks<'a> {
     moved: &'a mut [u32],
     pass: u32,
+    /// The lanes' planes, if the limit holds them ([`limit_stretch`]),
+    /// and the region's first lane among all.
+    planes: Option<(LanePlanes<'a>, usize)>,
 }
 
 impl LimitMarks<'_> {
@@ -1085,7 +1116,7 @@ impl LimitMarks<'_> {
             if !self.due::<M>((a, b)) {
                 return None;
             }
-            let tally = limit_chunk::<M>((a, b), keep, rest, lanes, factor);
+            let tally = limit_chunk::<M>((a, b), keep, rest, lanes, (factor, self.planes));
             if tally.shortened > 0 {
                 // The run's lanes only: a lane past it marked moved would
                 // make springs there due for nothing, pass after pass.
@@ -1115,6 +1146,12 @@ fn limit_runs(
         rest.len() == lanes_len && marks.moved.len() == lanes_len,
         "rest lengths and marks for each lane"
     );
+    if let Some((planes, first)) = marks.planes {
+        assert!(
+            planes.whole() && first + lanes_len <= planes.lanes,
+            "planes for each lane"
+        );
+    }
     for seg in runs {
         let (a, b, len) = (seg.a as usize, seg.b as usize, seg.len as usize);
         // Once a run, for every step's unchecked loads and stores below.
@@ -1219,7 +1256,7 @@ unsafe fn limit_chunk<const M: usize>(
     keep: Option<&[bool; M]>,
     rest: &[f32],
     lanes: &mut View,
-    factor: f32,
+    (factor, planes): (f32, Option<(LanePlanes, usize)>),
 ) -> Tally {
     // The lanes `keep` marks hold no spring of this run: never over, no
     // room (`None`: none kept, which the inlining folds away).
@@ -1264,6 +1301,7 @@ unsafe fn limit_chunk<const M: usize>(
     // (that became masked stores, whose reads could not be forwarded: as
     // in `lane_motion.rs`).
     let [mut na, mut nb] = [[[0.0f32; M]; 3]; 2];
+    let mut shortened = [false; M];
     for c in 0..M {
         let d = [xb[c] - xa[c], yb[c] - ya[c], zb[c] - za[c]];
         let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
@@ -1271,6 +1309,7 @@ unsafe fn limit_chunk<const M: usize>(
         let w = wa[c] + wb[c];
         // False for an excess that is not a number too.
         let on = excess > r[c] * factor * LIMIT_SLACK && w != 0.0 && !kept(c);
+        shortened[c] = on;
         let s = excess * LIMIT_OVER_RELAXATION / (w * len);
         let (sa, sb) = (wa[c] * s, wb[c] * s);
         // Selected, not added as zero: a zero change can flip a zero's sign.
@@ -1284,6 +1323,14 @@ unsafe fn limit_chunk<const M: usize>(
         over += on as u32;
         far += (on && excess > r[c] * LIMIT_FAR) as u32;
     }
+    if let Some((planes, first)) = planes {
+        // SAFETY: the planes hold the region's lanes (checked once a region
+        // by `limit_runs`).
+        unsafe {
+            hold_on_planes::<M>(planes, first + a, &mut na, (&wa, &shortened));
+            hold_on_planes::<M>(planes, first + b, &mut nb, (&wb, &shortened));
+        }
+    }
     // SAFETY: as above.
     unsafe {
         lanes.set_positions(a, na);
@@ -1293,6 +1340,39 @@ unsafe fn limit_chunk<const M: usize>(
         shortened: over,
         far,
         room,
+    }
+}
+
+/// Puts each of the `M` lanes from `at` (among all) whose spring was
+/// `shortened` and that is free (inverse mass `w` not zero) back onto each
+/// of its planes in `planes` that it lies behind (m), slot by slot, as
+/// the lanes' contacts do.
+///
+/// # Safety
+/// `at + M` is at most the planes' lanes, and every array holds its slots.
+#[inline(always)]
+unsafe fn hold_on_planes<const M: usize>(
+    planes: LanePlanes,
+    at: usize,
+    p: &mut [[f32; M]; 3],
+    (w, shortened): (&[f32; M], &[bool; M]),
+) {
+    for slot in 0..planes.slots {
+        let at = slot * planes.lanes + at;
+        // SAFETY: in bounds by the caller's promise.
+        let [nx, ny, nz, offset] = planes.arrays.map(|a| unsafe { load::<M>(a, at) });
+        for c in 0..M {
+            let gap = offset[c] - (nx[c] * p[0][c] + ny[c] * p[1][c] + nz[c] * p[2][c]);
+            let behind = shortened[c] && w[c] != 0.0 && gap > 0.0;
+            let n = [nx[c], ny[c], nz[c]];
+            for a in 0..3 {
+                p[a][c] = if behind {
+                    p[a][c] + n[a] * gap
+                } else {
+                    p[a][c]
+                };
+            }
+        }
     }
 }
 
@@ -1673,7 +1753,8 @@ mod tests {
         assert!(shortened > 50, "only {shortened} springs over the limit");
         for simd in [false, simd_available()] {
             let (mut plan, mut lanes) = stretched();
-            let n = limit_stretch_with(&mut plan, &mut lanes, 1.02, Team::ALONE, simd).shortened;
+            let n = limit_stretch_with(&mut plan, &mut lanes, (1.02, None), Team::ALONE, simd)
+                .shortened;
             assert_eq!(n, shortened);
             assert_eq!(bits(&mut lanes), bits(&mut reference));
         }
@@ -1700,7 +1781,8 @@ mod tests {
         assert!(shortened > 20, "only {shortened} springs over the limit");
         for simd in [false, simd_available()] {
             let (mut plan, mut lanes) = stretched();
-            let outcome = limit_stretch_with(&mut plan, &mut lanes, 1.02, Team::ALONE, simd);
+            let outcome =
+                limit_stretch_with(&mut plan, &mut lanes, (1.02, None), Team::ALONE, simd);
             assert_eq!(outcome.shortened, shortened);
             assert_eq!(bits(&mut lanes), bits(&mut reference));
             // Some region was passed over whole in the later passes: its
@@ -1767,6 +1849,59 @@ mod tests {
         );
     }
 
+    /// With planes, every free lane the limit moves ends on the front of
+    /// each of its planes (two slots: two planes a lane, some lanes with
+    /// none); without them the same limit leaves lanes behind. Lanes start
+    /// on their planes, so any move into one shows.
+    #[test]
+    fn the_limit_puts_the_lanes_it_moves_back_onto_their_planes() {
+        let normals = [
+            crate::math::Vector::new(0.3, 1.0, -0.2).normalize(),
+            crate::math::Vector::new(-0.5, 0.2, 1.0).normalize(),
+        ];
+        let run = |with: bool| {
+            let (mut plan, mut lanes) = setup();
+            let n = plan.lane.len();
+            let [x, y, z, .., w] = lanes.arrays_mut();
+            for v in x.iter_mut().chain(z.iter_mut()) {
+                *v *= 1.4;
+            }
+            w.iter_mut().filter(|w| **w != 0.0).for_each(|w| *w = 100.0);
+            let mut arrays: [Vec<f32>; 4] = Default::default();
+            for (slot, m) in normals.iter().enumerate() {
+                for k in 0..n {
+                    let p = crate::math::Vector::new(x[k], y[k], z[k]);
+                    let some = (k + slot) % 3 != 0;
+                    let plane = [m.x, m.y, m.z, if some { m.dot(p) } else { f32::NEG_INFINITY }];
+                    for (a, v) in arrays.iter_mut().zip(plane) {
+                        a.push(v);
+                    }
+                }
+            }
+            let planes = LanePlanes {
+                arrays: arrays.each_ref().map(|a| &a[..]),
+                slots: 2,
+                lanes: n,
+            };
+            let limit = (1.02, with.then_some(planes));
+            let shortened = limit_stretch(&mut plan, &mut lanes, limit, Team::ALONE).shortened;
+            assert!(shortened > 0);
+            let [x, y, z, .., w] = lanes.arrays_mut();
+            // The deepest a free lane lies behind one of its planes (m).
+            let mut deepest = 0.0f32;
+            for (slot, m) in normals.iter().enumerate() {
+                for k in (0..n).filter(|&k| w[k] != 0.0) {
+                    let p = crate::math::Vector::new(x[k], y[k], z[k]);
+                    deepest = deepest.max(arrays[3][slot * n + k] - m.dot(p));
+                }
+            }
+            deepest
+        };
+        let (with, without) = (run(true), run(false));
+        assert!(without > 1.0e-3, "{without} m: the test needs lanes moved behind");
+        assert!(with <= 1.0e-6, "{with} m behind a plane");
+    }
+
     /// The springs of the cloth of [`setup`].
     fn cloth_springs() -> crate::cloth::Springs {
         ClothBuilder::new(13, 9).build().unwrap().springs().clone()
@@ -1803,7 +1938,7 @@ mod tests {
         for simd in [false, simd_available()] {
             // Within a generous limit.
             let (mut plan, mut lanes) = setup();
-            let limited = limit_stretch_with(&mut plan, &mut lanes, 1.3, Team::ALONE, simd);
+            let limited = limit_stretch_with(&mut plan, &mut lanes, (1.3, None), Team::ALONE, simd);
             let LimitOutcome {
                 shortened: n, room, ..
             } = limited;
@@ -1817,7 +1952,8 @@ mod tests {
             // only at the springs still moving; a spring was shortened to its
             // limit, so none has room.
             let (mut plan, mut lanes) = setup();
-            let limited = limit_stretch_with(&mut plan, &mut lanes, 1.05, Team::ALONE, simd);
+            let limited =
+                limit_stretch_with(&mut plan, &mut lanes, (1.05, None), Team::ALONE, simd);
             let LimitOutcome {
                 shortened: n,
                 room,
@@ -1834,7 +1970,8 @@ mod tests {
             for v in lanes.arrays_mut().into_iter().take(3) {
                 v.iter_mut().for_each(|v| *v *= 1.3);
             }
-            let limited = limit_stretch_with(&mut plan, &mut lanes, 1.01, Team::ALONE, simd);
+            let limited =
+                limit_stretch_with(&mut plan, &mut lanes, (1.01, None), Team::ALONE, simd);
             let LimitOutcome {
                 shortened: n,
                 room,
@@ -2043,7 +2180,7 @@ mod tests {
                         [KindInSweep::READ_AND_KEPT; 3],
                         team,
                     );
-                    limit_stretch(&mut plan, &mut lanes, 1.02, team)
+                    limit_stretch(&mut plan, &mut lanes, (1.02, None), team)
                 })
             });
             (bits(&mut lanes), limited)

@@ -38,7 +38,7 @@ use crate::collision::{chords_clear_ball, Obstacle};
 use crate::math::{simd_available, Vector};
 use crate::parallel::{Disjoint, Team};
 
-use super::grid_sweep::{GridPlan, Lanes};
+use super::grid_sweep::{GridPlan, LanePlanes, Lanes};
 
 /// Lanes per chunk of a pass, a chunk to a thread.
 const CHUNK: usize = 2048;
@@ -312,6 +312,16 @@ impl LaneContacts {
             });
         }
         farthest
+    }
+
+    /// The planes of the lanes' cuboids ([`Self::take_planes`]), when they
+    /// hold one or more this substep.
+    pub fn cuboid_planes(&self) -> Option<LanePlanes<'_>> {
+        self.holds_cuboid().then(|| LanePlanes {
+            arrays: self.planes.each_ref().map(|r| &r[..]),
+            slots: self.cuboids(),
+            lanes: self.lanes,
+        })
     }
 
     /// Whether the lanes hold a cuboid this substep.
@@ -1898,7 +1908,11 @@ mod tests {
                     let p = pose.transform_point(local);
                     let k = plan.lane(i);
                     (x[k], y[k], z[k]) = (p.x, p.y, p.z);
-                    w[k] = if i == pinned_top || i == pinned_in { 0.0 } else { 1.0 };
+                    w[k] = if i == pinned_top || i == pinned_in {
+                        0.0
+                    } else {
+                        1.0
+                    };
                 }
             }
         }
@@ -1907,7 +1921,12 @@ mod tests {
             springs
                 .range(SpringKind::Stretch)
                 .chain(springs.range(SpringKind::Shear))
-                .map(|s| (plan.lane(springs.a[s] as usize), plan.lane(springs.b[s] as usize)))
+                .map(|s| {
+                    (
+                        plan.lane(springs.a[s] as usize),
+                        plan.lane(springs.b[s] as usize),
+                    )
+                })
         };
         let distance = |p: Vector| {
             contact_prepared(
@@ -1922,10 +1941,7 @@ mod tests {
         // The least of a spring's samples' distances to the cuboid (m).
         let least = |l: &mut Lanes, (a, b): (usize, usize)| {
             let [x, y, z, ..] = l.arrays_mut();
-            let (pa, pb) = (
-                Vector::new(x[a], y[a], z[a]),
-                Vector::new(x[b], y[b], z[b]),
-            );
+            let (pa, pb) = (Vector::new(x[a], y[a], z[a]), Vector::new(x[b], y[b], z[b]));
             EDGE_SAMPLES
                 .iter()
                 .map(|&t| distance(pa * (1.0 - t) + pb * t))

@@ -43,7 +43,9 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use super::general_sweep::{self, PackedParticles};
 use super::grid_chains::ChainScratch;
-use super::grid_sweep::{limit_stretch, sweep, Compliance, GridPlan, KindInSweep, Lanes};
+use super::grid_sweep::{
+    limit_stretch, sweep, Compliance, GridPlan, KindInSweep, LanePlanes, Lanes,
+};
 use super::lane_contacts::LaneContacts;
 use super::lane_motion::{self, Motion};
 use super::settings::SolverSettings;
@@ -304,17 +306,10 @@ pub(crate) fn step(
             {
                 contacts.keep_springs_off_cuboids(plan, l);
             }
-            let mut room = hold_limit(plan, l, model.stretch_limit, team);
-            if contacts.holds_cuboid() {
-                // A cuboid's planes against the limit, as the collision
-                // stage's planes are held (`hold_planes`).
-                for _ in 0..CUBOID_ROUNDS {
-                    if contacts.project(l, team) <= CUBOID_ROUND_PUSH {
-                        break;
-                    }
-                    room = hold_limit(plan, l, model.stretch_limit, team);
-                }
-            }
+            // The limit puts each lane it moves back onto its cuboids'
+            // planes at once (`hold_limit`).
+            let cuboids = contacts.cuboid_planes();
+            let room = hold_limit(plan, l, (model.stretch_limit, cuboids), team);
             let room = hold_planes((planes, lane), plan, l, (model.stretch_limit, room), team);
             // At the step's last substep the lanes' contacts win over the
             // limit, as the collision stage's do; a spring lengthens by at
@@ -562,29 +557,39 @@ fn project_planes(planes: &mut ContactPlanes, lane: &[u32], lanes: &mut Lanes, t
 /// `hammock` at 5.3% instead of 8.6%, each about a third slower a frame.
 const LIMIT_ROUNDS: u32 = 5;
 
-/// The stretch limit on the lanes (`factor` times the rest length), in up
-/// to [`LIMIT_ROUNDS`] calls of [`limit_stretch`]; returns the room (m)
-/// every stretch spring has left below it (`None`: not known).
-fn hold_limit(plan: &mut GridPlan, lanes: &mut Lanes, factor: f32, team: Team) -> Option<f32> {
-    let mut outcome = limit_stretch(plan, lanes, factor, team);
+/// The stretch limit on the lanes (`factor` times the rest length, the
+/// first of `limit`), in up to [`LIMIT_ROUNDS`] calls of
+/// [`limit_stretch`]; returns the room (m) every stretch spring has left
+/// below it (`None`: not known).
+///
+/// With the planes of the cuboids the lanes hold (the second of `limit`),
+/// the limit puts each lane it moves back onto them in the same step, so
+/// that the contacts and the limit meet over a cuboid's edges in one
+/// call. They took turns before: up to six rounds of the lanes' contacts,
+/// each followed by the limit again, while a round pushed a lane further
+/// than 10 µm (`box`, a 64 × 64 cotton sheet dropped on a cube at 32
+/// substeps, peak stretch over 120 frames: 7.33% with no round, 5.71% with
+/// two, 5.08% with four, 4.82% with six), 2.75 calls of the limit a
+/// substep. Measured against the six rounds (bench, one thread, ms a frame
+/// and peak): `box` 4.58 ms, 4.77% → 3.46 ms, 4.66%; the tablecloth of
+/// `tests/user_drops.rs` (a table top and its leg: two cuboids) 4.51% →
+/// 4.51%. With the planes in the limit the rounds changed nothing (a
+/// round's first push was under 10 µm) and were dropped.
+fn hold_limit(
+    plan: &mut GridPlan,
+    lanes: &mut Lanes,
+    limit: (f32, Option<LanePlanes>),
+    team: Team,
+) -> Option<f32> {
+    let mut outcome = limit_stretch(plan, lanes, limit, team);
     for _ in 1..LIMIT_ROUNDS {
         if !outcome.unsettled {
             break;
         }
-        outcome = limit_stretch(plan, lanes, factor, team);
+        outcome = limit_stretch(plan, lanes, limit, team);
     }
     outcome.room
 }
-
-/// Rounds of the lanes' contacts against the stretch limit after the
-/// sweeps, where the lanes hold a cuboid (its planes): each pushes the
-/// lanes back out and holds the limit again. Measured on `box` (a 64 × 64
-/// cotton sheet dropped on a cube, 32 substeps, peak stretch over 120
-/// frames), with the collision stage every second substep: 7.33% with none, 5.71% with two, 5.08% with four, 4.82%
-/// with six (ms a frame 5.7, 6.8, 6.4, 6.7: the rounds stop early).
-/// The collision stage held the cube through contact planes after every
-/// substep before: 5.30% and 9.1 ms.
-const CUBOID_ROUNDS: u32 = 6;
 
 /// How often (in substeps) the lanes keep the springs off the edges and
 /// corners of the cuboids they hold
@@ -600,13 +605,6 @@ const CUBOID_ROUNDS: u32 = 6;
 /// every second substep before, with its particle pass and stretch hold
 /// (the state out of the lanes and back): 4.56%, 6.4 ms, 4.78%.
 const CUBOID_EDGES_EVERY: u32 = 2;
-
-/// The farthest push (m) of a round of [`CUBOID_ROUNDS`] under which the
-/// rounds stop: it lengthens a spring by at most twice that (0.13% of the
-/// `box`'s 1.6 cm springs). Stopping only where nothing moved, the rounds
-/// ran to the last at rest (the `box` 6.2 against 5.4 ms a frame, the same
-/// peak).
-const CUBOID_ROUND_PUSH: f32 = 1.0e-5;
 
 /// Rounds of the contact planes against the stretch limit after the sweeps:
 /// each pushes the particles back onto their planes, and all but the last
@@ -641,7 +639,7 @@ fn hold_planes(
         }
         room = room.map(|room| room - 2.0 * pushed);
         if r + 1 < PLANE_ROUNDS {
-            room = hold_limit(plan, lanes, factor, team);
+            room = hold_limit(plan, lanes, (factor, None), team);
         }
     }
     let ContactPlanes {
