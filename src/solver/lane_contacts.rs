@@ -1198,7 +1198,7 @@ impl StillCuboid {
             }
             let (distance, normal) = self.signed_distance(sample);
             // Not a number: nothing known to push by.
-            if !(distance < margin) {
+            if distance >= margin || distance.is_nan() {
                 continue;
             }
             let (ca, cb) = ((1.0 - t) * wa, t * wb);
