@@ -10,11 +10,13 @@
 //! the substep: each particle near one stays on the tangent plane it
 //! started on (`collision/contact_planes.rs`) after the chains, each sweep
 //! and rounds of the stretch limit, with Coulomb friction at the end. When
-//! every obstacle is a still ball or half-space, the lanes hold all the
-//! contacts (`lane_contacts.rs`): each particle is put back out after the
-//! chains and after the last sweep, where Coulomb friction undoes its
-//! slide, then the stretch limit runs (its passes called again while a
-//! spring is still far over it; at the step's last substep the
+//! every obstacle is a still ball, half-space or cuboid, the lanes hold
+//! all the contacts (`lane_contacts.rs`): each particle is put back out
+//! after the chains and after the last sweep, where Coulomb friction
+//! undoes its slide (every second substep the springs are then kept off
+//! a cuboid's edges), then the stretch limit runs, putting each particle
+//! it moves back onto its cuboids' planes (its passes called again while
+//! a spring is still far over it; at the step's last substep the
 //! contacts win once more); the collision stage waits for the step's last
 //! substep, and the state (positions, velocities) stays in the lanes from
 //! one substep to the next, one's end and the next one's prediction in one
