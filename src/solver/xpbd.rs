@@ -301,8 +301,10 @@ pub(crate) fn step(
             contacts.project_with_friction(l, team);
             // The springs off a cuboid's edges and corners every
             // `CUBOID_EDGES_EVERY` substeps, before the limit takes back
-            // what that stretched.
+            // what that stretched (unless the settings keep only the
+            // particles out, as the collision stage's edge pass does).
             if held
+                && sub.settings.edge_collisions
                 && contacts.holds_cuboid()
                 && (sub.ctx.substep + 1).is_multiple_of(CUBOID_EDGES_EVERY)
             {
