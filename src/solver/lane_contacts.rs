@@ -108,7 +108,8 @@ pub(crate) struct LaneContacts {
     /// Lanes of the substep.
     lanes: usize,
     /// Per lane, for the cuboid [`Self::keep_springs_off_cuboids`] is at:
-    /// the faces it is beyond by the margin ([`StillCuboid::faces_beyond`]).
+    /// the faces it is beyond by the margin or over
+    /// ([`StillCuboid::faces_beyond`]).
     faces: Vec<u8>,
 }
 
@@ -255,7 +256,8 @@ impl LaneContacts {
     /// stage's edge pass does (`collision/edges.rs`): the lanes hold each
     /// particle out of a cuboid, but a spring between two of them may
     /// still cut one of its edges or corners. A spring whose two ends are
-    /// beyond one face (by that margin) lies beyond it whole, and is
+    /// beyond one face (by that margin) or over it comes no nearer than
+    /// its ends ([`StillCuboid::faces_beyond`]), and is
     /// passed over by one test of two lanes' marks (almost all of them:
     /// a sheet on a cube cuts only where it wraps its edges); the others
     /// are sampled at a quarter, a half and three quarters, and each
@@ -1097,10 +1099,19 @@ fn apart_from_faces(fa: &[u8], fb: &[u8], count: usize) -> u32 {
 const EDGE_SAMPLES: [f32; 3] = [0.25, 0.5, 0.75];
 
 impl StillCuboid {
-    /// The faces `p` (m) is at least `margin` (m) beyond: bit `2a` for the
-    /// face on the positive side of axis `a`, bit `2a + 1` for the
-    /// negative. A segment whose two ends share a bit lies beyond that
-    /// face whole, at least `margin` out of the cuboid. Without a branch.
+    /// The faces `p` (m) is at least `margin` (m) beyond or over: bit `2a`
+    /// for the face on the positive side of axis `a`, bit `2a + 1` for the
+    /// negative; over a face is on its side of the centre and within the
+    /// face's rectangle along the other two axes. A segment whose two ends
+    /// share a bit comes no nearer the cuboid than its nearer end (a face's
+    /// plane has the cuboid behind it, and over the face the distance is
+    /// the height above its plane, which changes linearly along the
+    /// segment): nothing to keep off an edge there, and the ends are the
+    /// lanes' contacts' (the collision stage's edge pass passes over such
+    /// springs too: both ends on one smooth stretch of surface). A sheet
+    /// laid within the thickness of a ramp's face is so left to the
+    /// contacts, which put it out gently, not thrown out by the springs.
+    /// Without a branch.
     #[inline(always)]
     fn faces_beyond(&self, p: [f32; 3], margin: f32) -> u8 {
         let d = [
@@ -1109,13 +1120,19 @@ impl StillCuboid {
             p[2] - self.centre.z,
         ];
         let half = [self.half.x, self.half.y, self.half.z];
-        let mut bits = 0u8;
+        let mut local = [0.0f32; 3];
+        let mut within = [false; 3];
         for a in 0..3 {
             let axis = self.axes[a];
-            let local = axis.x * d[0] + axis.y * d[1] + axis.z * d[2];
+            local[a] = axis.x * d[0] + axis.y * d[1] + axis.z * d[2];
+            within[a] = local[a].abs() <= half[a];
+        }
+        let mut bits = 0u8;
+        for a in 0..3 {
             let out = half[a] + margin;
-            bits |= u8::from(local >= out) << (2 * a);
-            bits |= u8::from(local <= -out) << (2 * a + 1);
+            let over = within[(a + 1) % 3] & within[(a + 2) % 3];
+            bits |= u8::from((local[a] >= out) | (over & (local[a] >= 0.0))) << (2 * a);
+            bits |= u8::from((local[a] <= -out) | (over & (local[a] < 0.0))) << (2 * a + 1);
         }
         bits
     }
@@ -1978,6 +1995,47 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A sheet laid flat on a cuboid's face within the thickness (a cloth
+    /// put on a ramp by hand): every spring lies over the face, no nearer
+    /// than its ends, and the lanes' edge pass leaves it to the contacts
+    /// (pushed out by the springs at once, it was thrown off the ramp).
+    #[test]
+    fn a_sheet_within_the_thickness_of_a_face_is_left_to_the_contacts() {
+        use crate::cloth::ClothBuilder;
+        let pose = Pose::from_parts(
+            Vector::new(0.0, -0.5, 0.0),
+            glam::Quat::from_rotation_z(-0.3),
+        );
+        let ramp = Obstacle::cuboid(Vector::new(2.0, 0.5, 2.0), pose);
+        let (cols, rows) = (10, 10);
+        let cloth = ClothBuilder::new(cols, rows).build().unwrap();
+        let plan = GridPlan::new(cloth.grid().unwrap(), cloth.springs()).unwrap();
+        let n = cols * rows;
+        let mut contacts = LaneContacts::default();
+        assert!(contacts.begin(std::slice::from_ref(&ramp), (THICKNESS, 0.001), n));
+        let mut l = Lanes::default();
+        l.resize(n);
+        {
+            let [x, y, z, _, _, _, w] = l.arrays_mut();
+            for r in 0..rows {
+                for c in 0..cols {
+                    let i = cloth.index(r, c).unwrap();
+                    let local = Vector::new(
+                        (c as f32 - 4.5) * 0.05,
+                        0.5 + 0.2 * THICKNESS,
+                        (r as f32 - 4.5) * 0.05,
+                    );
+                    let p = pose.transform_point(local);
+                    let k = plan.lane(i);
+                    (x[k], y[k], z[k], w[k]) = (p.x, p.y, p.z, 1.0);
+                }
+            }
+        }
+        let before = bits(&mut l);
+        assert_eq!(contacts.keep_springs_off_cuboids(&plan, &mut l), 0.0);
+        assert_eq!(bits(&mut l), before);
     }
 
     fn cuboid_of(contacts: &LaneContacts) -> StillCuboid {
