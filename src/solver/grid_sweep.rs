@@ -1033,22 +1033,32 @@ fn limit_region(
     #[cfg(target_arch = "x86_64")]
     if simd {
         // SAFETY: `simd` only when the CPU has AVX2.
-        return unsafe { limit_runs_avx2(runs, rest, lanes, factor, marks) };
+        return unsafe {
+            if marks.planes.is_some() {
+                limit_runs_avx2::<true>(runs, rest, lanes, factor, marks)
+            } else {
+                limit_runs_avx2::<false>(runs, rest, lanes, factor, marks)
+            }
+        };
     }
     let _ = simd;
-    limit_runs(runs, rest, lanes, factor, marks)
+    if marks.planes.is_some() {
+        limit_runs::<true>(runs, rest, lanes, factor, marks)
+    } else {
+        limit_runs::<false>(runs, rest, lanes, factor, marks)
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn limit_runs_avx2(
+unsafe fn limit_runs_avx2<const PLANES: bool>(
     runs: &[Segment],
     rest: &[f32],
     lanes: &mut View,
     factor: f32,
     marks: &mut LimitMarks,
 ) -> Tally {
-    limit_runs(runs, rest, lanes, factor, marks)
+    limit_runs::<PLANES>(runs, rest, lanes, factor, marks)
 }
 
 /// Which lanes of a region a pass of the stretch limit moved: per lane the
@@ -1103,7 +1113,7 @@ impl LimitMarks<'_> {
     /// `a + M` and `b + M` are at most the length of the marks, of `rest`
     /// and of the view.
     #[inline(always)]
-    unsafe fn limit<const M: usize>(
+    unsafe fn limit<const M: usize, const PLANES: bool>(
         &mut self,
         (a, b): (usize, usize),
         keep: Option<&[bool; M]>,
@@ -1116,7 +1126,8 @@ impl LimitMarks<'_> {
             if !self.due::<M>((a, b)) {
                 return None;
             }
-            let tally = limit_chunk::<M>((a, b), keep, rest, lanes, (factor, self.planes));
+            let planes = if PLANES { self.planes } else { None };
+            let tally = limit_chunk::<M, PLANES>((a, b), keep, rest, lanes, (factor, planes));
             if tally.shortened > 0 {
                 // The run's lanes only: a lane past it marked moved would
                 // make springs there due for nothing, pass after pass.
@@ -1133,7 +1144,7 @@ impl LimitMarks<'_> {
 /// returns how many it shortened, and the least room left below the limit
 /// among those it looked at (m², in squares of lengths).
 #[inline(always)]
-fn limit_runs(
+fn limit_runs<const PLANES: bool>(
     runs: &[Segment],
     rest: &[f32],
     lanes: &mut View,
@@ -1164,8 +1175,9 @@ fn limit_runs(
         // the limit where most are not due: the hammock).
         while done + WIDTH <= len {
             // SAFETY: within the run (asserted).
-            let t =
-                unsafe { marks.limit::<WIDTH>((a + done, b + done), None, rest, lanes, factor) };
+            let t = unsafe {
+                marks.limit::<WIDTH, PLANES>((a + done, b + done), None, rest, lanes, factor)
+            };
             if let Some(t) = t {
                 tally = tally.and(t);
             }
@@ -1185,7 +1197,8 @@ fn limit_runs(
         if ta.max(tb) + WIDTH <= lanes_len && apart(ta as u32, tb as u32, WIDTH as u32) {
             let keep: [bool; WIDTH] = std::array::from_fn(|t| t >= len - done);
             // SAFETY: within the region (tested just above).
-            let t = unsafe { marks.limit::<WIDTH>((ta, tb), Some(&keep), rest, lanes, factor) };
+            let t =
+                unsafe { marks.limit::<WIDTH, PLANES>((ta, tb), Some(&keep), rest, lanes, factor) };
             if let Some(t) = t {
                 tally = tally.and(t);
             }
@@ -1193,7 +1206,9 @@ fn limit_runs(
         }
         while done < len {
             // SAFETY: as above.
-            let t = unsafe { marks.limit::<1>((a + done, b + done), None, rest, lanes, factor) };
+            let t = unsafe {
+                marks.limit::<1, PLANES>((a + done, b + done), None, rest, lanes, factor)
+            };
             if let Some(t) = t {
                 tally = tally.and(t);
             }
@@ -1251,7 +1266,7 @@ fn least<const M: usize>(mut room: [f32; M]) -> f32 {
 /// # Safety
 /// `a + M` and `b + M` are at most the length of `rest` and of the view.
 #[inline(always)]
-unsafe fn limit_chunk<const M: usize>(
+unsafe fn limit_chunk<const M: usize, const PLANES: bool>(
     (a, b): (usize, usize),
     keep: Option<&[bool; M]>,
     rest: &[f32],
@@ -1323,7 +1338,10 @@ unsafe fn limit_chunk<const M: usize>(
         over += on as u32;
         far += (on && excess > r[c] * LIMIT_FAR) as u32;
     }
-    if let Some((planes, first)) = planes {
+    // `PLANES` known when compiled: without planes the step is the one
+    // it was before they came (a branch here slowed the hammock's limit,
+    // which holds it at rest, by a tenth).
+    if let Some((planes, first)) = planes.filter(|_| PLANES) {
         // SAFETY: the planes hold the region's lanes (checked once a region
         // by `limit_runs`).
         unsafe {
@@ -1872,7 +1890,12 @@ mod tests {
                 for k in 0..n {
                     let p = crate::math::Vector::new(x[k], y[k], z[k]);
                     let some = (k + slot) % 3 != 0;
-                    let plane = [m.x, m.y, m.z, if some { m.dot(p) } else { f32::NEG_INFINITY }];
+                    let plane = [
+                        m.x,
+                        m.y,
+                        m.z,
+                        if some { m.dot(p) } else { f32::NEG_INFINITY },
+                    ];
                     for (a, v) in arrays.iter_mut().zip(plane) {
                         a.push(v);
                     }
@@ -1898,7 +1921,10 @@ mod tests {
             deepest
         };
         let (with, without) = (run(true), run(false));
-        assert!(without > 1.0e-3, "{without} m: the test needs lanes moved behind");
+        assert!(
+            without > 1.0e-3,
+            "{without} m: the test needs lanes moved behind"
+        );
         assert!(with <= 1.0e-6, "{with} m behind a plane");
     }
 
