@@ -1878,7 +1878,6 @@ mod tests {
         );
     }
 
-    /// The one cuboid the lanes hold.
     /// A sheet folded over a turned cuboid's edge, each particle the
     /// thickness out of it: the springs across the edge cut its rounding.
     /// The lanes' edge pass puts every stretch and shear spring's samples
@@ -2038,6 +2037,7 @@ mod tests {
         assert_eq!(bits(&mut l), before);
     }
 
+    /// The one cuboid the lanes hold.
     fn cuboid_of(contacts: &LaneContacts) -> StillCuboid {
         match contacts.shapes[..] {
             [StillShape::Cuboid(c)] => c,
