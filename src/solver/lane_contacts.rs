@@ -1114,19 +1114,9 @@ impl StillCuboid {
     /// Without a branch.
     #[inline(always)]
     fn faces_beyond(&self, p: [f32; 3], margin: f32) -> u8 {
-        let d = [
-            p[0] - self.centre.x,
-            p[1] - self.centre.y,
-            p[2] - self.centre.z,
-        ];
+        let (local, beyond) = self.local(p);
         let half = [self.half.x, self.half.y, self.half.z];
-        let mut local = [0.0f32; 3];
-        let mut within = [false; 3];
-        for a in 0..3 {
-            let axis = self.axes[a];
-            local[a] = axis.x * d[0] + axis.y * d[1] + axis.z * d[2];
-            within[a] = local[a].abs() <= half[a];
-        }
+        let within = beyond.map(|b| b <= 0.0);
         let mut bits = 0u8;
         for a in 0..3 {
             let out = half[a] + margin;
@@ -1902,36 +1892,20 @@ mod tests {
         // row 2 pinned on the top, one of row 5 pinned inside the cuboid.
         let pinned_top = cloth.index(2, 3).unwrap();
         let pinned_in = cloth.index(5, 6).unwrap();
-        let mut l = Lanes::default();
-        l.resize(n);
-        {
-            let [x, y, z, _, _, _, w] = l.arrays_mut();
-            for r in 0..rows {
-                for c in 0..cols {
-                    let i = cloth.index(r, c).unwrap();
-                    let u = (c as f32 - 5.5) * spacing;
-                    let across = (r as f32 - 3.5) * spacing;
-                    let local = if u < 0.0 {
-                        Vector::new(half.x + u, half.y + THICKNESS, across)
-                    } else {
-                        Vector::new(half.x + THICKNESS, half.y - u, across)
-                    };
-                    let local = if i == pinned_in {
-                        Vector::new(half.x - 0.01, half.y - 0.01, across)
-                    } else {
-                        local
-                    };
-                    let p = pose.transform_point(local);
-                    let k = plan.lane(i);
-                    (x[k], y[k], z[k]) = (p.x, p.y, p.z);
-                    w[k] = if i == pinned_top || i == pinned_in {
-                        0.0
-                    } else {
-                        1.0
-                    };
-                }
-            }
-        }
+        let mut l = sheet_lanes(&cloth, &plan, |r, c| {
+            let i = cloth.index(r, c).unwrap();
+            let u = (c as f32 - 5.5) * spacing;
+            let across = (r as f32 - 3.5) * spacing;
+            let local = if i == pinned_in {
+                Vector::new(half.x - 0.01, half.y - 0.01, across)
+            } else if u < 0.0 {
+                Vector::new(half.x + u, half.y + THICKNESS, across)
+            } else {
+                Vector::new(half.x + THICKNESS, half.y - u, across)
+            };
+            let pinned = i == pinned_top || i == pinned_in;
+            (pose.transform_point(local), if pinned { 0.0 } else { 1.0 })
+        });
         let springs = cloth.springs();
         let edge_springs = || {
             springs
@@ -2014,27 +1988,38 @@ mod tests {
         let n = cols * rows;
         let mut contacts = LaneContacts::default();
         assert!(contacts.begin(std::slice::from_ref(&ramp), (THICKNESS, 0.001), n));
-        let mut l = Lanes::default();
-        l.resize(n);
-        {
-            let [x, y, z, _, _, _, w] = l.arrays_mut();
-            for r in 0..rows {
-                for c in 0..cols {
-                    let i = cloth.index(r, c).unwrap();
-                    let local = Vector::new(
-                        (c as f32 - 4.5) * 0.05,
-                        0.5 + 0.2 * THICKNESS,
-                        (r as f32 - 4.5) * 0.05,
-                    );
-                    let p = pose.transform_point(local);
-                    let k = plan.lane(i);
-                    (x[k], y[k], z[k], w[k]) = (p.x, p.y, p.z, 1.0);
-                }
-            }
-        }
+        let mut l = sheet_lanes(&cloth, &plan, |r, c| {
+            let local = Vector::new(
+                (c as f32 - 4.5) * 0.05,
+                0.5 + 0.2 * THICKNESS,
+                (r as f32 - 4.5) * 0.05,
+            );
+            (pose.transform_point(local), 1.0)
+        });
         let before = bits(&mut l);
         assert_eq!(contacts.keep_springs_off_cuboids(&plan, &mut l), 0.0);
         assert_eq!(bits(&mut l), before);
+    }
+
+    /// The lanes of a grid `cloth` in `plan`'s order, the particle of row
+    /// `r` and column `c` at `place(r, c)` (position in m, inverse mass).
+    fn sheet_lanes(
+        cloth: &crate::cloth::Cloth,
+        plan: &GridPlan,
+        place: impl Fn(usize, usize) -> (Vector, f32),
+    ) -> Lanes {
+        let grid = cloth.grid().unwrap();
+        let mut l = Lanes::default();
+        l.resize(cloth.particle_count());
+        let [x, y, z, _, _, _, w] = l.arrays_mut();
+        for r in 0..grid.rows {
+            for c in 0..grid.cols {
+                let (p, inverse_mass) = place(r, c);
+                let k = plan.lane(cloth.index(r, c).unwrap());
+                (x[k], y[k], z[k], w[k]) = (p.x, p.y, p.z, inverse_mass);
+            }
+        }
+        l
     }
 
     /// The one cuboid the lanes hold.
