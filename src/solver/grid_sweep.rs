@@ -1126,8 +1126,7 @@ impl LimitMarks<'_> {
             if !self.due::<M>((a, b)) {
                 return None;
             }
-            let planes = if PLANES { self.planes } else { None };
-            let tally = limit_chunk::<M, PLANES>((a, b), keep, rest, lanes, (factor, planes));
+            let tally = limit_chunk::<M, PLANES>((a, b), keep, rest, lanes, (factor, self.planes));
             if tally.shortened > 0 {
                 // The run's lanes only: a lane past it marked moved would
                 // make springs there due for nothing, pass after pass.
