@@ -9,8 +9,9 @@ use super::stage::CollisionStage;
 use crate::cloth::Particles;
 use crate::math::Vector;
 
-/// Where along a spring the edge test samples.
-const EDGE_SAMPLES: [f32; 3] = [0.25, 0.5, 0.75];
+/// Where along a spring the edge test samples (as fractions of it from
+/// its first end; the solver's lanes sample there too).
+pub(crate) const EDGE_SAMPLES: [f32; 3] = [0.25, 0.5, 0.75];
 
 impl CollisionStage {
     /// Keeps the samples of the spring `a`–`b` at least `margin` outside every obstacle.

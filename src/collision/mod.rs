@@ -33,7 +33,7 @@ mod tracks;
 pub use contact::{contact, penetration_depth, Contact};
 pub(crate) use contact_planes::ContactPlanes;
 pub use contact_set::{ContactSet, ParticleContact};
-pub(crate) use edges::chords_clear_ball;
+pub(crate) use edges::{chords_clear_ball, EDGE_SAMPLES};
 pub use obstacle::{DynamicBody, Obstacle, ObstacleImpulse};
 pub use response::{respond, FrictionPolicy, Response};
 pub use self_contacts::SelfContacts;

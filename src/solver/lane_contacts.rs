@@ -34,7 +34,7 @@
 //! the stage ran every second substep for that before, and the state left
 //! the lanes for it (`box` 6.4 → 4.4 ms, bench, one thread).
 
-use crate::collision::{chords_clear_ball, Obstacle};
+use crate::collision::{chords_clear_ball, Obstacle, EDGE_SAMPLES};
 use crate::math::{simd_available, Vector};
 use crate::parallel::{Disjoint, Team};
 
@@ -284,7 +284,7 @@ impl LaneContacts {
             cuboid.mark_faces_beyond([&x[..], &y[..], &z[..]], margin, faces);
             plan.for_each_edge_run(|(a, b, len)| {
                 // Once a run, for the loops' indexing.
-                if a.max(b) + len > n || faces.len() != n {
+                if a.max(b) + len > n {
                     return;
                 }
                 // The springs to sample, found 32 at a time without a
@@ -1093,10 +1093,6 @@ fn apart_from_faces(fa: &[u8], fb: &[u8], count: usize) -> u32 {
     }
     due
 }
-
-/// Where along a spring [`LaneContacts::keep_springs_off_cuboids`] samples
-/// it: as the collision stage's edge pass (`collision/edges.rs`).
-const EDGE_SAMPLES: [f32; 3] = [0.25, 0.5, 0.75];
 
 impl StillCuboid {
     /// The faces `p` (m) is at least `margin` (m) beyond or over: bit `2a`
