@@ -144,6 +144,33 @@ impl Obstacle {
         )
     }
 
+    /// Whether an edge or corner of the obstacle, where it stands at the
+    /// step's start, may lie inside `region` (a world box): for a cuboid,
+    /// whether the box around one of its twelve edges meets it (a cloth
+    /// lying on the middle of a large floor meets none); for any other
+    /// shape with edges, whether the shape's own box does.
+    pub fn edges_may_meet(&self, region: &Aabb) -> bool {
+        if !self.has_edges() {
+            return false;
+        }
+        let Some(cuboid) = self.shape.as_cuboid() else {
+            return self.shape.compute_aabb(&self.pose).intersects(region);
+        };
+        let h = cuboid.half_extents;
+        let corner = |k: usize| {
+            let sign = |bit: usize| if k & bit == 0 { -1.0 } else { 1.0 };
+            self.pose
+                .transform_point(Vector::new(sign(1) * h.x, sign(2) * h.y, sign(4) * h.z))
+        };
+        // An edge joins two corners that differ in one axis' sign.
+        (0..8).any(|k| {
+            [1, 2, 4].into_iter().filter(|&bit| k & bit == 0).any(|bit| {
+                let (a, b) = (corner(k), corner(k | bit));
+                Aabb::new(a.min(b), a.max(b)).intersects(region)
+            })
+        })
+    }
+
     /// Whether the obstacle stays where it is: no rapier body, no velocity.
     pub fn is_still(&self) -> bool {
         self.body.is_none() && self.linvel == Vector::ZERO && self.angvel == Vector::ZERO
@@ -190,5 +217,49 @@ impl Obstacle {
             return Err(bad("its shape has a non-finite size"));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn region(centre: Vector, half: f32) -> Aabb {
+        Aabb::new(centre - Vector::splat(half), centre + Vector::splat(half))
+    }
+
+    /// A cloth on the middle of a floor meets none of its edges; one over
+    /// its rim or by a corner does; a box in the empty corner of a turned
+    /// cuboid's bounding box meets none; a ball has none, and a cylinder's
+    /// are wherever its bounding box is.
+    #[test]
+    fn edges_are_met_near_a_cuboids_rim_only() {
+        let floor = Obstacle::cuboid(
+            Vector::new(2.0, 0.1, 2.0),
+            Pose::from_translation(Vector::new(0.0, -0.1, 0.0)),
+        );
+        assert!(!floor.edges_may_meet(&region(Vector::new(0.3, 0.2, -0.4), 0.8)));
+        assert!(floor.edges_may_meet(&region(Vector::new(1.6, 0.2, 0.0), 0.5)));
+        assert!(floor.edges_may_meet(&region(Vector::new(-2.1, -0.3, 2.1), 0.15)));
+        // Under the floor, by its bottom's rim.
+        assert!(floor.edges_may_meet(&region(Vector::new(0.0, -0.25, -1.9), 0.1)));
+        // A cube turned 45° about y: its box's corner at (+1, ·, +1) is empty.
+        let turned = Obstacle::cuboid(
+            Vector::splat(0.5),
+            Pose::from_parts(
+                Vector::ZERO,
+                Rotation::from_rotation_y(std::f32::consts::FRAC_PI_4),
+            ),
+        );
+        let corner = Vector::new(0.62, 0.0, 0.62);
+        assert!(turned.shape.compute_aabb(&turned.pose).intersects(&region(corner, 0.05)));
+        assert!(!turned.edges_may_meet(&region(corner, 0.05)));
+        // Its upright edge at x = √2 / 2.
+        assert!(turned.edges_may_meet(&region(Vector::new(0.72, 0.0, 0.0), 0.05)));
+        let ball = Obstacle::ball(Vector::ZERO, 0.5);
+        assert!(!ball.edges_may_meet(&region(Vector::new(0.5, 0.0, 0.0), 0.1)));
+        let cylinder = Obstacle::new(SharedShape::cylinder(0.5, 0.2), Pose::IDENTITY);
+        assert!(cylinder.edges_may_meet(&region(Vector::new(0.25, 0.45, 0.0), 0.1)));
+        assert!(!cylinder.edges_may_meet(&region(Vector::new(0.25, 0.8, 0.0), 0.1)));
     }
 }

@@ -534,7 +534,9 @@ enum EdgesNear {
 
 /// Which obstacles with edges or corners may meet the cloth within a step
 /// of `dt` seconds: those whose swept bounding box meets the cloth's, grown
-/// by how far a particle may move in the step.
+/// by how far a particle may move in the step; of a still one, only an
+/// edge counts ([`Obstacle::edges_may_meet`]): a cloth on the middle of a
+/// floor meets a face, which holds it as a plane does.
 fn edges_within_reach(cloth: &Cloth, obstacles: &[Obstacle], dt: f32) -> EdgesNear {
     if !obstacles.iter().any(Obstacle::has_edges) {
         return EdgesNear::None;
@@ -553,7 +555,9 @@ fn edges_within_reach(cloth: &Cloth, obstacles: &[Obstacle], dt: f32) -> EdgesNe
             if !o.is_still() {
                 return EdgesNear::Moving;
             }
-            near = EdgesNear::Still;
+            if o.edges_may_meet(&cloth_box) {
+                near = EdgesNear::Still;
+            }
         }
     }
     near
