@@ -56,6 +56,20 @@ pub(crate) const BALL_MOTIONS: f32 = 4.0;
 enum StillShape {
     /// A ball: centre (m) and radius plus the thickness (m).
     Ball { centre: Vector, reach: f32 },
+    /// A capsule (a bar, a rod): the ball of radius plus thickness `reach`
+    /// (m) around the point of its axis nearest the lane; the axis from
+    /// `from` (m) along the unit vector `axis` for `length` (m). A lane on
+    /// the axis (within [`ON_AXIS`] of the reach) goes out along `across`,
+    /// a unit vector square to the axis (the rounding of its nearest
+    /// point gives it no direction, or one along the axis, which does not
+    /// lead out).
+    Capsule {
+        from: Vector,
+        axis: Vector,
+        across: Vector,
+        length: f32,
+        reach: f32,
+    },
     /// A half-space: outward unit normal, and the offset (m) of its
     /// boundary moved out by the thickness (`n · x = offset` on it).
     Plane { normal: Vector, offset: f32 },
@@ -64,6 +78,10 @@ enum StillShape {
     /// the thickness (m).
     Cuboid(StillCuboid),
 }
+
+/// Within this share of a capsule's reach from its axis, a lane goes out
+/// along the capsule's `across` ([`StillShape::Capsule`]).
+const ON_AXIS: f32 = 1.0e-3;
 
 /// How far within the thickness, as a share of it, a lane may start a
 /// substep and still be put out to the thickness by a cuboid's plane
@@ -116,12 +134,13 @@ pub(crate) struct LaneContacts {
 impl LaneContacts {
     /// Whether every obstacle is one the lanes may hold, whatever the
     /// motion (none counts: nothing to hold): still (no rapier body, no
-    /// velocity), a ball, a half-space or a cuboid.
+    /// velocity), a ball, a capsule, a half-space or a cuboid.
     pub fn may_hold(obstacles: &[Obstacle]) -> bool {
         obstacles.iter().all(|o| {
             let shape = &o.shape;
             o.is_still()
                 && (shape.as_ball().is_some()
+                    || shape.as_capsule().is_some()
                     || shape.as_halfspace().is_some()
                     || shape.as_cuboid().is_some())
         })
@@ -130,8 +149,8 @@ impl LaneContacts {
     /// Whether the lanes hold the contacts of every one of `obstacles`
     /// (and there is one) for a substep in which no particle moves
     /// further than `motion` (m): each is still (no rapier body, no
-    /// velocity) and a half-space, or a ball of a radius or a cuboid of
-    /// half extents over [`BALL_MOTIONS`] times `motion` (a particle is
+    /// velocity) and a half-space, or a ball or capsule of a radius or a
+    /// cuboid of half extents over [`BALL_MOTIONS`] times `motion` (a particle is
     /// put back through the nearest face, which must be the one it came
     /// in by). The collision stage then need not run after a substep but
     /// the last.
@@ -142,6 +161,7 @@ impl LaneContacts {
             && obstacles.iter().all(|o| {
                 let shape = &o.shape;
                 shape.as_ball().is_none_or(|ball| ball.radius > deep)
+                    && shape.as_capsule().is_none_or(|c| c.radius > deep)
                     && shape
                         .as_cuboid()
                         .is_none_or(|c| c.half_extents.min_element() > deep)
@@ -192,13 +212,33 @@ impl LaneContacts {
                     reach: 2.0 * (thickness + motion),
                     settle: SETTLE_SHARE * thickness,
                 }),
-                // `holds` took only balls, half-spaces and cuboids; should
+                // `holds` took only balls, capsules, half-spaces and cuboids; should
                 // it take another shape one day, this one is not held.
-                (None, None, None) => {
-                    self.shapes.clear();
-                    self.friction.clear();
-                    return false;
-                }
+                (None, None, None) => match o.shape.as_capsule() {
+                    Some(capsule) => {
+                        let [a, b] = [capsule.segment.a, capsule.segment.b]
+                            .map(|end| o.pose.transform_point(end));
+                        let length = (b - a).length();
+                        // A capsule of no length is a ball at `from`.
+                        let axis = if length > 0.0 {
+                            (b - a) / length
+                        } else {
+                            Vector::Y
+                        };
+                        StillShape::Capsule {
+                            from: a,
+                            axis,
+                            across: axis.any_orthonormal_vector(),
+                            length,
+                            reach: capsule.radius + thickness,
+                        }
+                    }
+                    None => {
+                        self.shapes.clear();
+                        self.friction.clear();
+                        return false;
+                    }
+                },
             };
             self.shapes.push(shape);
             self.friction.push(o.friction);
@@ -361,7 +401,8 @@ impl LaneContacts {
     /// outside it (the outside is convex). Between two points at least
     /// `R = r + t` from a ball's centre, a segment of length `l` comes no
     /// closer than `√(R² − l²/4)`, which must be at least `r + t/2`: the
-    /// edge pass's own test of one ball ([`chords_clear_ball`]). A ball
+    /// edge pass's own test of one ball ([`chords_clear_ball`]); so too
+    /// for a capsule, whose every axis point is such a centre. A ball
     /// beside another shape: not known (a spring may rest across both).
     pub fn springs_stay_out(obstacles: &[Obstacle], longest: f32, thickness: f32) -> bool {
         let halfspaces = obstacles.iter().all(|o| o.shape.as_halfspace().is_some());
@@ -371,9 +412,12 @@ impl LaneContacts {
         let [one] = obstacles else {
             return false;
         };
-        one.shape
-            .as_ball()
-            .is_some_and(|ball| chords_clear_ball(ball.radius, thickness, longest))
+        let radius = match (one.shape.as_ball(), one.shape.as_capsule()) {
+            (Some(ball), _) => ball.radius,
+            (None, Some(capsule)) => capsule.radius,
+            (None, None) => return false,
+        };
+        chords_clear_ball(radius, thickness, longest)
     }
 
     /// Puts every free lane (inverse mass not zero) back out of every
@@ -584,35 +628,41 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
         match shape {
             StillShape::Ball { centre, reach } => {
                 let centre = [centre.x, centre.y, centre.z].map(|v| _mm256_set1_ps(v));
-                let d = [0, 1, 2].map(|a| _mm256_sub_ps(p[a], centre[a]));
-                let d2 = _mm256_add_ps(
-                    _mm256_add_ps(_mm256_mul_ps(d[0], d[0]), _mm256_mul_ps(d[1], d[1])),
-                    _mm256_mul_ps(d[2], d[2]),
-                );
-                // No lane near the ball (with a margin for the rounding of
-                // the square) nor last pushed by it: the shape would change
-                // no bit, and its square root and division are the pass's
-                // dearest operations.
-                let near = _mm256_cmp_ps::<_CMP_LT_OQ>(d2, _mm256_set1_ps(near_ball(reach)));
                 let its = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
                     _mm256_castps_si256(touch),
                     _mm256_castps_si256(mark),
                 ));
-                if _mm256_movemask_ps(_mm256_or_ps(near, its)) == 0 {
+                let Some(out) = round_avx2(p, (centre, reach, shape.way_out()), (its, free))
+                else {
                     continue;
-                }
-                let reach = _mm256_set1_ps(reach);
-                let length = _mm256_sqrt_ps(d2);
-                let recip = _mm256_div_ps(_mm256_set1_ps(1.0), length);
-                // At the centre itself: out through the top.
-                let at_centre = _mm256_cmp_ps::<_CMP_EQ_OQ>(d2, zero);
-                n = [0, 1, 2].map(|a| {
-                    let up = _mm256_set1_ps(if a == 1 { 1.0 } else { 0.0 });
-                    _mm256_blendv_ps(_mm256_mul_ps(d[a], recip), up, at_centre)
-                });
-                to = [0, 1, 2].map(|a| _mm256_add_ps(centre[a], _mm256_mul_ps(n[a], reach)));
-                inside = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(length, reach), free);
-                push = _mm256_and_ps(inside, _mm256_sub_ps(reach, length));
+                };
+                (to, n, inside, push) = out;
+            }
+            StillShape::Capsule {
+                from,
+                axis,
+                length,
+                reach,
+                ..
+            } => {
+                let from = [from.x, from.y, from.z].map(|v| _mm256_set1_ps(v));
+                let u = [axis.x, axis.y, axis.z].map(|v| _mm256_set1_ps(v));
+                let d = [0, 1, 2].map(|a| _mm256_sub_ps(p[a], from[a]));
+                let along = _mm256_add_ps(
+                    _mm256_add_ps(_mm256_mul_ps(d[0], u[0]), _mm256_mul_ps(d[1], u[1])),
+                    _mm256_mul_ps(d[2], u[2]),
+                );
+                let t = _mm256_min_ps(_mm256_max_ps(along, zero), _mm256_set1_ps(length));
+                let centre = [0, 1, 2].map(|a| _mm256_add_ps(from[a], _mm256_mul_ps(u[a], t)));
+                let its = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                    _mm256_castps_si256(touch),
+                    _mm256_castps_si256(mark),
+                ));
+                let Some(out) = round_avx2(p, (centre, reach, shape.way_out()), (its, free))
+                else {
+                    continue;
+                };
+                (to, n, inside, push) = out;
             }
             StillShape::Plane { normal: m, offset } => {
                 let m = [m.x, m.y, m.z].map(|v| _mm256_set1_ps(v));
@@ -710,6 +760,59 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
     _mm256_storeu_ps(z, p[2]);
     _mm256_storeu_ps(depth_at, depth);
     _mm256_storeu_si256(touch_at, _mm256_castps_si256(touch));
+}
+
+/// Eight lanes at `p` (m) against balls of radius `reach` (m) at `centre`
+/// (m, one a lane), a lane at a squared distance up to `tiny` (m²) from
+/// its centre put out along `up` ([`StillShape::way_out`]): the point
+/// each is put back to, the outward normal,
+/// which lanes are inside (and free: `free`) and how far they are pushed
+/// (m), as the portable pass computes them; `None` when no lane is near
+/// its ball nor last pushed by this shape (`its`): the shape would change
+/// no bit, and its square root and division are the pass's dearest
+/// operations.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+#[allow(clippy::type_complexity)]
+unsafe fn round_avx2(
+    p: [std::arch::x86_64::__m256; 3],
+    (centre, reach, (up, tiny)): ([std::arch::x86_64::__m256; 3], f32, (Vector, f32)),
+    (its, free): (std::arch::x86_64::__m256, std::arch::x86_64::__m256),
+) -> Option<(
+    [std::arch::x86_64::__m256; 3],
+    [std::arch::x86_64::__m256; 3],
+    std::arch::x86_64::__m256,
+    std::arch::x86_64::__m256,
+)> {
+    use std::arch::x86_64::*;
+    let d = [0, 1, 2].map(|a| _mm256_sub_ps(p[a], centre[a]));
+    let d2 = _mm256_add_ps(
+        _mm256_add_ps(_mm256_mul_ps(d[0], d[0]), _mm256_mul_ps(d[1], d[1])),
+        _mm256_mul_ps(d[2], d[2]),
+    );
+    // With a margin for the rounding of the square.
+    let near = _mm256_cmp_ps::<_CMP_LT_OQ>(d2, _mm256_set1_ps(near_ball(reach)));
+    if _mm256_movemask_ps(_mm256_or_ps(near, its)) == 0 {
+        return None;
+    }
+    let reach = _mm256_set1_ps(reach);
+    let length = _mm256_sqrt_ps(d2);
+    let recip = _mm256_div_ps(_mm256_set1_ps(1.0), length);
+    // At the centre itself: out along `up`.
+    let at_centre = _mm256_cmp_ps::<_CMP_LE_OQ>(d2, _mm256_set1_ps(tiny));
+    let up = [up.x, up.y, up.z];
+    let n = [0, 1, 2].map(|a| {
+        _mm256_blendv_ps(
+            _mm256_mul_ps(d[a], recip),
+            _mm256_set1_ps(up[a]),
+            at_centre,
+        )
+    });
+    let to = [0, 1, 2].map(|a| _mm256_add_ps(centre[a], _mm256_mul_ps(n[a], reach)));
+    let inside = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(length, reach), free);
+    let push = _mm256_and_ps(inside, _mm256_sub_ps(reach, length));
+    Some((to, n, inside, push))
 }
 
 /// Eight lanes at `p` (m) against the half-spaces `m · x ≥ offset` (unit
@@ -917,7 +1020,9 @@ impl Eight {
         match shape {
             StillShape::Plane { normal, offset } => ([normal.x, normal.y, normal.z], offset),
             StillShape::Cuboid(cuboid) => self.plane(law, cuboid.slot, k),
-            StillShape::Ball { .. } => ([0.0; 3], f32::NEG_INFINITY),
+            StillShape::Ball { .. } | StillShape::Capsule { .. } => {
+                ([0.0; 3], f32::NEG_INFINITY)
+            }
         }
     }
 
@@ -1026,6 +1131,14 @@ fn maybe_inside(e: &Eight, law: &Law) -> bool {
                     any |= d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < near;
                 }
             }
+            StillShape::Capsule { reach, .. } => {
+                let near = near_ball(reach);
+                for k in 0..W {
+                    let c = shape.centre_for([p[0][k], p[1][k], p[2][k]]);
+                    let d = [p[0][k] - c[0], p[1][k] - c[1], p[2][k] - c[2]];
+                    any |= d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < near;
+                }
+            }
             StillShape::Plane { normal: m, offset } => {
                 for k in 0..W {
                     any |= offset - (m.x * p[0][k] + m.y * p[1][k] + m.z * p[2][k]) > 0.0;
@@ -1040,6 +1153,42 @@ fn maybe_inside(e: &Eight, law: &Law) -> bool {
         }
     }
     any
+}
+
+impl StillShape {
+    /// The centre (m) of the ball that holds a lane at `p` (m): a ball's
+    /// own, a capsule's axis point nearest `p` (the same operations as the
+    /// AVX2 pass); the origin for the other shapes, which take no centre.
+    #[inline(always)]
+    fn centre_for(&self, p: [f32; 3]) -> [f32; 3] {
+        match *self {
+            StillShape::Ball { centre, .. } => [centre.x, centre.y, centre.z],
+            StillShape::Capsule {
+                from, axis, length, ..
+            } => {
+                let d = [p[0] - from.x, p[1] - from.y, p[2] - from.z];
+                let along = d[0] * axis.x + d[1] * axis.y + d[2] * axis.z;
+                let t = along.max(0.0).min(length);
+                [from.x + axis.x * t, from.y + axis.y * t, from.z + axis.z * t]
+            }
+            StillShape::Plane { .. } | StillShape::Cuboid(_) => [0.0; 3],
+        }
+    }
+
+    /// Which way (a unit vector) a ball or capsule puts out a lane at its
+    /// centre, and within what squared distance (m²) of it a lane is
+    /// there: a ball's top, at the centre itself; a capsule's `across`,
+    /// within [`ON_AXIS`] of its reach.
+    #[inline(always)]
+    fn way_out(&self) -> (Vector, f32) {
+        match *self {
+            StillShape::Capsule { across, reach, .. } => {
+                let tiny = ON_AXIS * reach;
+                (across, tiny * tiny)
+            }
+            _ => (Vector::Y, 0.0),
+        }
+    }
 }
 
 impl StillCuboid {
@@ -1350,21 +1499,18 @@ fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
         let mut push = [0.0f32; W];
         let mut inside = [false; W];
         match shape {
-            StillShape::Ball { centre, reach } => {
+            StillShape::Ball { reach, .. } | StillShape::Capsule { reach, .. } => {
                 for k in 0..W {
-                    let d = [
-                        e.p[0][k] - centre.x,
-                        e.p[1][k] - centre.y,
-                        e.p[2][k] - centre.z,
-                    ];
+                    let c = shape.centre_for([e.p[0][k], e.p[1][k], e.p[2][k]]);
+                    let d = [e.p[0][k] - c[0], e.p[1][k] - c[1], e.p[2][k] - c[2]];
                     let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
                     let length = d2.sqrt();
                     let recip = 1.0 / length;
-                    // At the centre itself: out through the top.
-                    let at_centre = d2 == 0.0;
-                    let c = [centre.x, centre.y, centre.z];
+                    // At the centre itself: out along `up`.
+                    let (up, tiny) = shape.way_out();
+                    let at_centre = d2 <= tiny;
                     for a in 0..3 {
-                        let up = if a == 1 { 1.0 } else { 0.0 };
+                        let up = [up.x, up.y, up.z][a];
                         n[a][k] = if at_centre { up } else { d[a] * recip };
                         to[a][k] = c[a] + n[a][k] * reach;
                     }
@@ -1706,10 +1852,11 @@ mod tests {
         assert!(y.iter().all(|&y| (y - THICKNESS).abs() < 1e-6));
     }
 
-    /// The lanes hold still balls, half-spaces and cuboids only, and no
-    /// ball or cuboid the substep's motion could carry a particle far into.
+    /// The lanes hold still balls, capsules, half-spaces and cuboids only,
+    /// and no ball, capsule or cuboid the substep's motion could carry a
+    /// particle far into.
     #[test]
-    fn the_lanes_hold_still_balls_and_planes_only() {
+    fn the_lanes_hold_still_balls_capsules_planes_and_cuboids_only() {
         let [ball, floor] = ball_and_floor();
         assert!(LaneContacts::holds(&[ball.clone(), floor.clone()], 0.01));
         assert!(!LaneContacts::holds(&[], 0.01), "nothing to hold");
@@ -1738,15 +1885,113 @@ mod tests {
             "a 2 cm top the motion could carry a particle through"
         );
         let capsule = Obstacle::new(SharedShape::capsule_y(0.5, 0.1), Pose::IDENTITY);
-        assert!(!LaneContacts::holds(&[ball, capsule.clone()], 0.001));
+        assert!(LaneContacts::holds(&[ball.clone(), capsule.clone()], 0.001));
+        assert!(
+            !LaneContacts::holds(&[ball.clone(), capsule], 0.03),
+            "a 10 cm bar the motion could carry a particle through"
+        );
+        let cylinder = Obstacle::new(SharedShape::cylinder(0.5, 0.1), Pose::IDENTITY);
+        assert!(!LaneContacts::holds(&[ball, cylinder.clone()], 0.001));
         // What it holds it holds whole, or nothing.
         let mut contacts = LaneContacts::default();
         assert!(
             contacts.begin(std::slice::from_ref(&floor), (THICKNESS, 0.01), 4)
                 && !contacts.is_empty()
         );
-        assert!(!contacts.begin(&[floor, capsule], (THICKNESS, 0.01), 4) && contacts.is_empty());
+        assert!(!contacts.begin(&[floor, cylinder], (THICKNESS, 0.01), 4) && contacts.is_empty());
         assert_eq!(contacts.touching(), 0, "nothing held, nothing touching");
+    }
+
+    /// A turned capsule (a bar) and lanes around it, on its axis and
+    /// beyond its ends: every free lane ends at least its radius and the
+    /// thickness from the axis segment, a pushed one moved straight away
+    /// from the axis point nearest it (beyond an end, from the end: the
+    /// caps are balls); pinned lanes and lanes clear of it keep their
+    /// bits; the vector and the portable passes agree to the bit, with
+    /// friction too.
+    #[test]
+    fn a_capsule_puts_the_lanes_out_of_its_axis_by_the_thickness() {
+        let turn = glam::Quat::from_rotation_x(std::f32::consts::FRAC_PI_2)
+            * glam::Quat::from_rotation_z(0.4);
+        let pose = Pose::from_parts(Vector::new(0.2, 0.4, -0.1), turn);
+        let (half_height, radius) = (0.8, 0.05);
+        let bar = Obstacle::new(SharedShape::capsule_y(half_height, radius), pose);
+        let [a, b] = [-half_height, half_height].map(|y| pose.transform_point(Vector::Y * y));
+        let nearest = |p: Vector| {
+            let u = b - a;
+            a + u * ((p - a).dot(u) / u.length_squared()).clamp(0.0, 1.0)
+        };
+        let n = CHUNK + 21;
+        let place = || {
+            let mut l = Lanes::default();
+            l.resize(n);
+            let [x, y, z, sx, sy, sz, w] = l.arrays_mut();
+            for k in 0..n {
+                let s = k as f32;
+                // Along the axis and 20% past either end, within 1.5 radii.
+                let along = a + (b - a) * (1.4 * ((0.618 * s) % 1.0) - 0.2);
+                let dir = Vector::new((1.3 * s).sin(), (0.7 * s).cos(), (2.1 * s).sin())
+                    .normalize_or(Vector::X);
+                let p = along + dir * (1.5 * radius * ((0.37 * s) % 1.0));
+                let p = if k % 11 == 3 { nearest(p) } else { p };
+                (x[k], y[k], z[k]) = (p.x, p.y, p.z);
+                (sx[k], sy[k], sz[k]) = (p.x + 0.001, p.y - 0.002, p.z + 0.001);
+                w[k] = if k % 6 == 0 { 0.0 } else { 1.5 };
+            }
+            l
+        };
+        let obstacles = [bar.with_friction(0.6)];
+        let (mut vector, mut portable) = (LaneContacts::default(), LaneContacts::default());
+        assert!(vector.begin(&obstacles, (THICKNESS, 0.002), n));
+        assert!(portable.begin(&obstacles, (THICKNESS, 0.002), n));
+        let (mut l, mut m) = (place(), place());
+        let before = bits(&mut l);
+        vector.project(&mut l, Team::ALONE);
+        portable_pass(&mut portable, &mut m, false);
+        assert_eq!(bits(&mut l), bits(&mut m));
+        let reach = radius + THICKNESS;
+        let (mut pushed, mut clear) = (0, 0);
+        {
+            let [x, y, z, _, _, _, w] = l.arrays_mut();
+            for k in 0..n {
+                let p = Vector::new(x[k], y[k], z[k]);
+                let old = Vector::new(
+                    f32::from_bits(before[k]),
+                    f32::from_bits(before[n + k]),
+                    f32::from_bits(before[2 * n + k]),
+                );
+                if w[k] == 0.0 || (old - nearest(old)).length() >= reach {
+                    assert_eq!(p, old, "lane {k} moved");
+                    clear += 1;
+                    continue;
+                }
+                let out = p - nearest(old);
+                assert!(
+                    (out.length() - reach).abs() < 1e-5 && (p - nearest(p)).length() >= reach - 1e-5,
+                    "lane {k} at {p:?}, {} from the axis",
+                    (p - nearest(p)).length()
+                );
+                // Straight out from the nearest axis point (on the axis
+                // itself: any way out).
+                let from = old - nearest(old);
+                if from.length() > 1e-4 {
+                    assert!(
+                        from.normalize().dot(out.normalize()) > 0.999,
+                        "lane {k} pushed along {out:?} from {old:?}"
+                    );
+                }
+                pushed += 1;
+            }
+        }
+        assert!(pushed > n / 3 && clear > n / 8, "{pushed} pushed, {clear} clear");
+        assert_eq!(vector.touching() as usize, pushed);
+        vector.project_with_friction(&mut l, Team::ALONE);
+        portable_pass(&mut portable, &mut m, true);
+        assert_eq!(bits(&mut l), bits(&mut m));
+        assert_eq!(
+            (&vector.depth, &vector.touch),
+            (&portable.depth, &portable.touch)
+        );
     }
 
     /// A turned table top (a cuboid) and lanes that start around and in
