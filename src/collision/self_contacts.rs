@@ -41,7 +41,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::neighbours::MeshNeighbours;
+use super::neighbours::{MeshNeighbours, Sheet};
 use super::patches::Patches;
 use super::spatial_hash::SpatialHash;
 use crate::cloth::{Particles, Topology};
@@ -109,10 +109,11 @@ pub struct SelfContacts {
 const TRIANGLE_BLOCK: usize = 1024;
 
 /// The pairs a block of triangles found, alone on its cache lines (blocks
-/// on different threads push at once).
+/// on different threads push at once), and a list for the second of two
+/// triangles looked at together ([`Look::two_triangles`]).
 #[derive(Debug, Default, Clone)]
 #[repr(align(128))]
-struct PairList(Vec<SelfPair>);
+struct PairList(Vec<SelfPair>, Vec<SelfPair>);
 
 /// One look for pairs: the positions and how far to look.
 struct Look<'a> {
@@ -124,21 +125,35 @@ struct Look<'a> {
     margin: f32,
 }
 
+/// A triangle as a look tests particles against it: its corners' indices,
+/// first corner `a` and edges `e1`, `e2` (m), unit normal, how far outside
+/// each edge a projection is still taken (barycentric, [`rim_slack`]), the
+/// particles of its smooth sheet, and the box (m) a particle within reach
+/// of it lies in.
+struct Facing<'a> {
+    t: u32,
+    tri: [u32; 3],
+    a: Vector,
+    e1: Vector,
+    e2: Vector,
+    n: Vector,
+    slack: [f32; 3],
+    sheet: Sheet<'a>,
+    lo: Vector,
+    hi: Vector,
+}
+
 impl Look<'_> {
-    /// Pushes the pairs of triangle `t` to `out`, in particle order.
-    fn triangle(
-        &self,
-        t: usize,
-        (hash, neighbours): (&SpatialHash, &MeshNeighbours),
-        out: &mut Vec<SelfPair>,
-    ) {
+    /// Triangle `t` as the look tests particles against it; none for a
+    /// triangle of no area.
+    fn facing<'n>(&self, t: usize, neighbours: &'n MeshNeighbours) -> Option<Facing<'n>> {
         let (x, tri) = (self.x, self.topology.triangles[t]);
         let [a, b, c] = tri.map(|i| x[i as usize]);
         let (e1, e2) = (b - a, c - a);
         let normal = e1.cross(e2);
         let area2 = normal.length();
         if !is_positive(area2) {
-            return;
+            return None;
         }
         let (n, reach) = (normal / area2, self.reach);
         let rim = rim(self.thickness, (e1, e2));
@@ -149,26 +164,101 @@ impl Look<'_> {
         // a pair can reach from its corners, are left to the springs.
         let sheet = neighbours.sheet(tri, reach + rim + e1.length().max(e2.length()));
         let pad = Vector::splat(reach);
-        let (lo, hi) = (a.min(b).min(c) - pad, a.max(b).max(c) + pad);
-        let first = out.len();
-        hash.for_each_inside(lo, hi, |p, xp| {
-            let d = (xp - a).dot(n);
-            if d.abs() >= reach || sheet.holds(p) {
-                return;
-            }
-            let [u, v, w] = barycentric(xp - n * d - a, e1, e2);
-            if u < -slack[0] || v < -slack[1] || w < -slack[2] || neighbours.adjacent(p, tri) {
-                return;
-            }
-            out.push(SelfPair {
-                particle: p,
-                triangle: t as u32,
-                side: if d >= 0.0 { 1.0 } else { -1.0 },
+        Some(Facing {
+            t: t as u32,
+            tri,
+            a,
+            e1,
+            e2,
+            n,
+            slack,
+            sheet,
+            lo: a.min(b).min(c) - pad,
+            hi: a.max(b).max(c) + pad,
+        })
+    }
+
+    /// The pair of particle `p` at `xp` (m) with the triangle `f`, if it
+    /// lies within reach of it, outside its sheet and not its neighbour.
+    #[inline(always)]
+    fn pair(
+        &self,
+        f: &Facing,
+        (p, xp): (u32, Vector),
+        neighbours: &MeshNeighbours,
+    ) -> Option<SelfPair> {
+        let d = (xp - f.a).dot(f.n);
+        if d.abs() >= self.reach || f.sheet.holds(p) {
+            return None;
+        }
+        let [u, v, w] = barycentric(xp - f.n * d - f.a, f.e1, f.e2);
+        let slack = f.slack;
+        if u < -slack[0] || v < -slack[1] || w < -slack[2] || neighbours.adjacent(p, f.tri) {
+            return None;
+        }
+        Some(SelfPair {
+            particle: p,
+            triangle: f.t,
+            side: if d >= 0.0 { 1.0 } else { -1.0 },
+        })
+    }
+
+    /// Pushes the pairs of each triangle of `ts` to `out`, triangle by
+    /// triangle, each's in particle order.
+    fn triangles(
+        &self,
+        ts: &[usize],
+        (hash, neighbours): (&SpatialHash, &MeshNeighbours),
+        out: &mut Vec<SelfPair>,
+    ) {
+        for &t in ts {
+            let Some(f) = self.facing(t, neighbours) else {
+                continue;
+            };
+            let first = out.len();
+            hash.for_each_inside(f.lo, f.hi, |p, xp| {
+                if let Some(pair) = self.pair(&f, (p, xp), neighbours) {
+                    out.push(pair);
+                }
             });
+            // The hash hands them out by bucket: particle order, for the same
+            // pass whatever the table's size.
+            out[first..].sort_unstable_by_key(|q| q.particle);
+        }
+    }
+
+    /// [`Self::triangles`] on triangles `t` and `t + 1`, from one scan of
+    /// the hash over the box around both (each particle in it tested
+    /// against the triangles whose own box holds it: the same pairs);
+    /// `second` is scratch.
+    fn two_triangles(
+        &self,
+        t: usize,
+        (hash, neighbours): (&SpatialHash, &MeshNeighbours),
+        (out, second): (&mut Vec<SelfPair>, &mut Vec<SelfPair>),
+    ) {
+        let (Some(f), Some(g)) = (self.facing(t, neighbours), self.facing(t + 1, neighbours))
+        else {
+            return self.triangles(&[t, t + 1], (hash, neighbours), out);
+        };
+        let inside = |xp: Vector, f: &Facing| xp.cmpge(f.lo).all() && xp.cmple(f.hi).all();
+        let first = out.len();
+        second.clear();
+        hash.for_each_inside(f.lo.min(g.lo), f.hi.max(g.hi), |p, xp| {
+            if inside(xp, &f) {
+                if let Some(pair) = self.pair(&f, (p, xp), neighbours) {
+                    out.push(pair);
+                }
+            }
+            if inside(xp, &g) {
+                if let Some(pair) = self.pair(&g, (p, xp), neighbours) {
+                    second.push(pair);
+                }
+            }
         });
-        // The hash hands them out by bucket: particle order, for the same
-        // pass whatever the table's size.
         out[first..].sort_unstable_by_key(|q| q.particle);
+        second.sort_unstable_by_key(|q| q.particle);
+        out.extend_from_slice(second);
     }
 }
 
@@ -402,17 +492,29 @@ impl SelfContacts {
         let lists = Disjoint::new(&mut self.blocks[..blocks]);
         team.sum_count(blocks, |k| {
             // SAFETY: block `k` alone uses list `k`.
-            let list = unsafe { &mut lists.range(k..k + 1)[0].0 };
+            let PairList(list, second) = unsafe { &mut lists.range(k..k + 1)[0] };
             list.clear();
             let end = ((k + 1) * TRIANGLE_BLOCK).min(triangles.len());
-            for t in (k * TRIANGLE_BLOCK..end).filter(|&t| !patches.quiet_triangle(t)) {
-                look.triangle(t, (hash, neighbours), list);
+            // Two at a time: a grid's two triangles of a cell (and a
+            // mesh's neighbours, mostly) share most of their box, whose
+            // scan of the hash is then paid once.
+            let mut t = k * TRIANGLE_BLOCK;
+            while t < end {
+                let pair = [t, t + 1].map(|t| t < end && !patches.quiet_triangle(t));
+                match pair {
+                    [true, true] => look.two_triangles(t, (hash, neighbours), (list, second)),
+                    [true, false] => look.triangles(&[t], (hash, neighbours), list),
+                    [false, true] => look.triangles(&[t + 1], (hash, neighbours), list),
+                    [false, false] => {}
+                }
+                t += 2;
             }
             0
         });
         for list in &mut self.blocks[..blocks] {
             self.pairs.extend_from_slice(&list.0);
             headroom(&mut list.0);
+            headroom(&mut list.1);
         }
         headroom(&mut self.pairs);
         self.edge_pairs.clear();
