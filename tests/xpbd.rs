@@ -582,7 +582,11 @@ fn a_towel_dropped_across_a_rail_hangs_over_it() {
     let mut touched = 0;
     for frame in 0..120 {
         let report = sim.step(1.0 / 60.0, std::slice::from_ref(&rail)).unwrap();
-        let nearest = sim.positions().iter().map(|&p| from_axis(p)).fold(f32::INFINITY, f32::min);
+        let nearest = sim
+            .positions()
+            .iter()
+            .map(|&p| from_axis(p))
+            .fold(f32::INFINITY, f32::min);
         assert!(
             nearest >= radius + thickness - 1e-4,
             "frame {frame}: a particle {nearest} m from the rail's axis"

@@ -164,10 +164,13 @@ impl Obstacle {
         };
         // An edge joins two corners that differ in one axis' sign.
         (0..8).any(|k| {
-            [1, 2, 4].into_iter().filter(|&bit| k & bit == 0).any(|bit| {
-                let (a, b) = (corner(k), corner(k | bit));
-                Aabb::new(a.min(b), a.max(b)).intersects(region)
-            })
+            [1, 2, 4]
+                .into_iter()
+                .filter(|&bit| k & bit == 0)
+                .any(|bit| {
+                    let (a, b) = (corner(k), corner(k | bit));
+                    Aabb::new(a.min(b), a.max(b)).intersects(region)
+                })
         })
     }
 
@@ -252,7 +255,10 @@ mod tests {
             ),
         );
         let corner = Vector::new(0.62, 0.0, 0.62);
-        assert!(turned.shape.compute_aabb(&turned.pose).intersects(&region(corner, 0.05)));
+        assert!(turned
+            .shape
+            .compute_aabb(&turned.pose)
+            .intersects(&region(corner, 0.05)));
         assert!(!turned.edges_may_meet(&region(corner, 0.05)));
         // Its upright edge at x = √2 / 2.
         assert!(turned.edges_may_meet(&region(Vector::new(0.72, 0.0, 0.0), 0.05)));

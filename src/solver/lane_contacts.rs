@@ -632,8 +632,7 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
                     _mm256_castps_si256(touch),
                     _mm256_castps_si256(mark),
                 ));
-                let Some(out) = round_avx2(p, (centre, reach, shape.way_out()), (its, free))
-                else {
+                let Some(out) = round_avx2(p, (centre, reach, shape.way_out()), (its, free)) else {
                     continue;
                 };
                 (to, n, inside, push) = out;
@@ -658,8 +657,7 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
                     _mm256_castps_si256(touch),
                     _mm256_castps_si256(mark),
                 ));
-                let Some(out) = round_avx2(p, (centre, reach, shape.way_out()), (its, free))
-                else {
+                let Some(out) = round_avx2(p, (centre, reach, shape.way_out()), (its, free)) else {
                     continue;
                 };
                 (to, n, inside, push) = out;
@@ -802,13 +800,8 @@ unsafe fn round_avx2(
     // At the centre itself: out along `up`.
     let at_centre = _mm256_cmp_ps::<_CMP_LE_OQ>(d2, _mm256_set1_ps(tiny));
     let up = [up.x, up.y, up.z];
-    let n = [0, 1, 2].map(|a| {
-        _mm256_blendv_ps(
-            _mm256_mul_ps(d[a], recip),
-            _mm256_set1_ps(up[a]),
-            at_centre,
-        )
-    });
+    let n = [0, 1, 2]
+        .map(|a| _mm256_blendv_ps(_mm256_mul_ps(d[a], recip), _mm256_set1_ps(up[a]), at_centre));
     let to = [0, 1, 2].map(|a| _mm256_add_ps(centre[a], _mm256_mul_ps(n[a], reach)));
     let inside = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(length, reach), free);
     let push = _mm256_and_ps(inside, _mm256_sub_ps(reach, length));
@@ -1020,9 +1013,7 @@ impl Eight {
         match shape {
             StillShape::Plane { normal, offset } => ([normal.x, normal.y, normal.z], offset),
             StillShape::Cuboid(cuboid) => self.plane(law, cuboid.slot, k),
-            StillShape::Ball { .. } | StillShape::Capsule { .. } => {
-                ([0.0; 3], f32::NEG_INFINITY)
-            }
+            StillShape::Ball { .. } | StillShape::Capsule { .. } => ([0.0; 3], f32::NEG_INFINITY),
         }
     }
 
@@ -1169,7 +1160,11 @@ impl StillShape {
                 let d = [p[0] - from.x, p[1] - from.y, p[2] - from.z];
                 let along = d[0] * axis.x + d[1] * axis.y + d[2] * axis.z;
                 let t = along.max(0.0).min(length);
-                [from.x + axis.x * t, from.y + axis.y * t, from.z + axis.z * t]
+                [
+                    from.x + axis.x * t,
+                    from.y + axis.y * t,
+                    from.z + axis.z * t,
+                ]
             }
             StillShape::Plane { .. } | StillShape::Cuboid(_) => [0.0; 3],
         }
@@ -1967,7 +1962,8 @@ mod tests {
                 }
                 let out = p - nearest(old);
                 assert!(
-                    (out.length() - reach).abs() < 1e-5 && (p - nearest(p)).length() >= reach - 1e-5,
+                    (out.length() - reach).abs() < 1e-5
+                        && (p - nearest(p)).length() >= reach - 1e-5,
                     "lane {k} at {p:?}, {} from the axis",
                     (p - nearest(p)).length()
                 );
@@ -1983,7 +1979,10 @@ mod tests {
                 pushed += 1;
             }
         }
-        assert!(pushed > n / 3 && clear > n / 8, "{pushed} pushed, {clear} clear");
+        assert!(
+            pushed > n / 3 && clear > n / 8,
+            "{pushed} pushed, {clear} clear"
+        );
         assert_eq!(vector.touching() as usize, pushed);
         vector.project_with_friction(&mut l, Team::ALONE);
         portable_pass(&mut portable, &mut m, true);

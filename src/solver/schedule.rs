@@ -35,8 +35,8 @@ use super::stage_times::Lap;
 use super::strain_limit::limit_stretch;
 use super::substep::Substep;
 use super::substeps::Substeps;
-use super::xpbd;
 use super::substeps::{self_collision_substeps, MAX_SELF_SUBSTEP};
+use super::xpbd;
 use crate::cloth::{Cloth, Particles, SpringKind};
 use crate::collision::{
     any_stretch_over_limit, LookBasis, Obstacle, ResolveOptions, SelfContactParams,
