@@ -276,15 +276,20 @@ impl Look<'_> {
         let (a, b) = (x[ia as usize], x[ib as usize]);
         let u = b - a;
         let length = u.length();
-        // An edge within reach has its lower end within reach plus an edge
-        // length (edges are about as long as this one; twice for margin).
-        let pad = Vector::splat(self.reach + 2.0 * length);
+        // An edge within reach has its ends within reach plus its length
+        // (twice this one's, or a quarter over the mesh's longest as
+        // stretched: any mesh's): the box around this edge so padded holds
+        // both, and the hash's scan of it tests every point it hands out
+        // (the points of its cells, tested here one by one, were a tenth
+        // of the `fold`'s frame).
+        let span = (2.0 * length).max(1.25 * neighbours.longest());
+        let pad = Vector::splat(self.reach + span);
         let (lo, hi) = (a.min(b) - pad, a.max(b) + pad);
         let sheet = neighbours.sheet([ia, ib, ib], self.reach + 2.0 * length);
         let borders = neighbours.border_edges();
         let first = out.len();
         let length2 = u.length_squared();
-        hash.for_each_in(lo, hi, |p| {
+        hash.for_each_inside(lo, hi, |p, xp| {
             if sheet.holds(p) {
                 return;
             }
@@ -292,7 +297,6 @@ impl Look<'_> {
             // with a point within reach of it is at least that long (a hair
             // more spares the rounding: the pairs are those of the look
             // without this test).
-            let xp = x[p as usize];
             let along = if length2 > 0.0 {
                 ((xp - a).dot(u) / length2).clamp(0.0, 1.0)
             } else {

@@ -303,6 +303,7 @@ impl ClothSolver {
             // another must not stretch the cloth past it) and the obstacles
             // (they win where the two disagree: a layer pressed onto a ball
             // stays outside it).
+            let mut self_touching = 0;
             if cloth.params.self_collision {
                 let (selfc, topology) = (&mut ws.self_contacts, &*cloth.topology);
                 let thickness = layer;
@@ -312,7 +313,7 @@ impl ClothSolver {
                     selfc.find(look, &cloth.particles.x, &basis, team);
                     report.self_looks += 1;
                 }
-                report.self_contacts += selfc.resolve(
+                self_touching = selfc.resolve(
                     &mut cloth.particles,
                     topology,
                     &SelfContactParams {
@@ -321,6 +322,7 @@ impl ClothSolver {
                         h,
                     },
                 );
+                report.self_contacts += self_touching;
                 watch.lap(&mut times.self_collision);
             }
             // Tethers: after the springs (they hold what those let
@@ -353,7 +355,7 @@ impl ClothSolver {
             // Self-collision moved particles the lanes had put out of the
             // obstacles: they are put out again at once (the stage runs
             // at the last substep).
-            if outcome.contacts_held && cloth.params.self_collision && substep + 1 < k {
+            if outcome.contacts_held && self_touching > 0 && substep + 1 < k {
                 let p = &mut cloth.particles;
                 xpbd::hold_contacts_again(&mut ws.xpbd, (&mut p.x, &mut p.v), team);
             }
