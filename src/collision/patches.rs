@@ -50,20 +50,25 @@ impl PieceLayout {
         self.first_particle..self.first_particle + (self.cells_across + 1) * (self.cells_down + 1)
     }
 
-    fn triangles(&self) -> std::ops::Range<usize> {
-        self.first_triangle..self.first_triangle + 2 * self.cells_across * self.cells_down
-    }
-
     fn patches(&self) -> std::ops::Range<usize> {
         self.first_patch..self.first_patch + self.across * self.down
     }
 
-    /// The patch of the piece's triangle `t` (counted in the cloth; two
-    /// per cell, row by row).
-    fn patch_of(&self, t: usize) -> usize {
-        let cell = (t - self.first_triangle) / 2;
-        let (r, c) = (cell / self.cells_across, cell % self.cells_across);
-        self.first_patch + (r / self.side) * self.across + c / self.side
+    /// Calls `f` with each of the piece's cells' first triangle (counted
+    /// in the cloth; two per cell, row by row) and its patch, in triangle
+    /// order, without a division (a division or two a triangle were a
+    /// tenth of the update).
+    fn for_each_cell(&self, mut f: impl FnMut(usize, usize)) {
+        for r in 0..self.cells_down {
+            let row_patch = self.first_patch + (r / self.side) * self.across;
+            let row_triangle = self.first_triangle + 2 * r * self.cells_across;
+            for i in 0..self.across {
+                let end = ((i + 1) * self.side).min(self.cells_across);
+                for c in i * self.side..end {
+                    f(row_triangle + 2 * c, row_patch + i);
+                }
+            }
+        }
     }
 
     /// The patch at `(column, row)` among the piece's patches.
@@ -87,6 +92,11 @@ pub(crate) struct Patches {
     spread: Vec<f32>,
     /// Per patch: true when its triangles need no look.
     quiet: Vec<bool>,
+    /// Per triangle of the cloth: its patch's `quiet` (false in no patch).
+    quiet_triangles: Vec<bool>,
+    /// Per triangle of the cloth: its normal scaled by twice its area
+    /// (zero in no patch), scratch of the update.
+    normals: Vec<Vector>,
 }
 
 impl Patches {
@@ -142,26 +152,39 @@ impl Patches {
         // rather than one a triangle (the arc cosine was 2% of the fold).
         self.spread.clear();
         self.spread.resize(count, 1.0);
+        self.normals.clear();
+        self.normals.resize(triangles.len(), Vector::ZERO);
+        let (lo, hi, axis, normals) = (
+            &mut self.lo,
+            &mut self.hi,
+            &mut self.axis,
+            &mut self.normals,
+        );
         for piece in &self.pieces {
-            for t in piece.triangles() {
-                let k = piece.patch_of(t);
-                let [a, b, c] = triangles[t].map(|i| x[i as usize]);
-                self.lo[k] = self.lo[k].min(a.min(b).min(c));
-                self.hi[k] = self.hi[k].max(a.max(b).max(c));
-                self.axis[k] += (b - a).cross(c - a);
-            }
-            for t in piece.triangles() {
-                let k = piece.patch_of(t);
-                let [a, b, c] = triangles[t].map(|i| x[i as usize]);
-                let n = (b - a).cross(c - a);
-                let cos = n.dot(self.axis[k]) / (n.length() * self.axis[k].length());
-                let cos = if cos.is_finite() {
-                    cos
-                } else {
-                    f32::NEG_INFINITY
-                };
-                self.spread[k] = self.spread[k].min(cos);
-            }
+            piece.for_each_cell(|first, k| {
+                for t in [first, first + 1] {
+                    let [a, b, c] = triangles[t].map(|i| x[i as usize]);
+                    lo[k] = lo[k].min(a.min(b).min(c));
+                    hi[k] = hi[k].max(a.max(b).max(c));
+                    let n = (b - a).cross(c - a);
+                    normals[t] = n;
+                    axis[k] += n;
+                }
+            });
+        }
+        let spread = &mut self.spread;
+        for piece in &self.pieces {
+            piece.for_each_cell(|first, k| {
+                for n in [normals[first], normals[first + 1]] {
+                    let cos = n.dot(axis[k]) / (n.length() * axis[k].length());
+                    let cos = if cos.is_finite() {
+                        cos
+                    } else {
+                        f32::NEG_INFINITY
+                    };
+                    spread[k] = spread[k].min(cos);
+                }
+            });
         }
         for spread in &mut self.spread {
             // NaN (a degenerate triangle or axis) counts as the widest.
@@ -208,14 +231,20 @@ impl Patches {
                 self.quiet.push(quiet);
             }
         }
+        self.quiet_triangles.clear();
+        self.quiet_triangles.resize(triangles.len(), false);
+        let quiet_triangles = &mut self.quiet_triangles;
+        for piece in &self.pieces {
+            piece.for_each_cell(|first, k| {
+                quiet_triangles[first] = self.quiet[k];
+                quiet_triangles[first + 1] = self.quiet[k];
+            });
+        }
     }
 
     /// True when triangle `t` needs no look.
     pub fn quiet_triangle(&self, t: usize) -> bool {
-        self.pieces
-            .iter()
-            .find(|piece| piece.triangles().contains(&t))
-            .is_some_and(|piece| self.quiet[piece.patch_of(t)])
+        self.quiet_triangles.get(t).copied().unwrap_or(false)
     }
 
     /// True when particle `p` lies in a grid piece, and there only in quiet
