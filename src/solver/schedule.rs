@@ -101,6 +101,7 @@ impl ClothSolver {
             return Ok(report);
         }
         let k = self.substeps_among(cloth, obstacles, dt);
+        let edges_near = edges_within_reach(cloth, obstacles, dt) != EdgesNear::None;
         if cloth.params.self_collision && dt / k as f32 > MAX_SELF_SUBSTEP {
             return Err(ClothError::SelfCollisionNeedsSubsteps {
                 integrator: integrator.name(),
@@ -157,7 +158,12 @@ impl ClothSolver {
 
         let threads = self.settings.parallel && shares_well(cloth, integrator);
         let mut report = with_team(threads, |team| {
-            self.substeps(cloth, obstacles, (dt, k, longest_rest, layer), team)
+            self.substeps(
+                cloth,
+                obstacles,
+                (dt, k, longest_rest, layer, edges_near),
+                team,
+            )
         })?;
         // Divergence check.
         if !is_sane(cloth) {
@@ -225,7 +231,7 @@ impl ClothSolver {
         &mut self,
         cloth: &mut Cloth,
         obstacles: &[Obstacle],
-        (dt, k, longest_rest, layer): (f32, u32, f32, f32),
+        (dt, k, longest_rest, layer, edges_near): (f32, u32, f32, f32, bool),
         team: Team,
     ) -> Result<StepReport, ClothError> {
         let h = dt / k as f32;
@@ -288,6 +294,7 @@ impl ClothSolver {
                 grid: cloth.topology.grid,
                 team,
                 moved_after,
+                edges_near,
             };
             watch.lap(&mut times.contacts);
             let outcome = match integrate(&sub, (x, v, x_prev), &mut self.state, ws) {

@@ -28,4 +28,8 @@ pub(crate) struct Substep<'a> {
     /// (self-collision, tethers): the integrator must hand its state back
     /// in the particles' arrays every substep.
     pub moved_after: bool,
+    /// An edge or corner of an obstacle may meet the cloth this step
+    /// (the schedule's test, from the cloth's box grown by the step's
+    /// motion): without one, no spring can cut an edge.
+    pub edges_near: bool,
 }

@@ -302,9 +302,12 @@ pub(crate) fn step(
             // The springs off a cuboid's edges and corners every
             // `CUBOID_EDGES_EVERY` substeps, before the limit takes back
             // what that stretched (unless the settings keep only the
-            // particles out, as the collision stage's edge pass does).
+            // particles out, as the collision stage's edge pass does, or
+            // no edge is within the step's reach: the `fold` on the middle
+            // of its floor).
             if held
                 && sub.settings.edge_collisions
+                && sub.edges_near
                 && contacts.holds_cuboid()
                 && (sub.ctx.substep + 1).is_multiple_of(CUBOID_EDGES_EVERY)
             {
