@@ -1,6 +1,6 @@
-//! Contacts with still balls, half-spaces and cuboids (a ball on a stand,
-//! a floor, a table) held inside the small-steps solver's substeps, in its
-//! grid lanes. The
+//! Contacts with still balls, capsules, half-spaces and cuboids (a ball on
+//! a stand, a bar, a floor, a table) held inside the small-steps solver's
+//! substeps, in its grid lanes. The
 //! collision stage after a substep visits every particle near an obstacle
 //! through its general pass (candidates, exact contact, tracing, friction,
 //! impulses): at N = 128 on the `drape`'s ball that was a third of the

@@ -22,8 +22,8 @@ pub struct StepReport {
     pub iterations: u32,
     /// Particle–obstacle contacts the collision stage resolved, summed over
     /// the substeps it ran: every substep, but only the last when the
-    /// integrator held every contact itself (xpbd among still balls and
-    /// half-spaces). When the integrator left it nothing to do at the last
+    /// integrator held every contact itself (xpbd among still balls,
+    /// capsules, half-spaces and cuboids). When the integrator left it nothing to do at the last
     /// either (every stretch spring within the limit, no spring able to cut
     /// an obstacle), the stage does not run, and this counts the particles
     /// the integrator pushed out of an obstacle in that substep.

@@ -10,12 +10,14 @@
 //!               it: a fresh look every few substeps, a pass every
 //!               substep) → tethers (cloths with them) → stretch limit
 //!               (solvers that do not hold it in their own substep, and
-//!               every solver with self-collision or a particle the
-//!               tethers held) → resolve contacts (with the
-//!               friction policy the integrator handed back; at the last
-//!               substep only, when the integrator held every contact
-//!               itself: xpbd among still balls and planes) → the stretch
-//!               limit once more, against the contacts
+//!               every solver where layers touched or the tethers held a
+//!               particle) → the lanes' contacts again (xpbd's lanes
+//!               held them and layers touched) → resolve contacts (with
+//!               the friction policy the integrator handed back; at the
+//!               last substep only, when the integrator held every
+//!               contact itself: xpbd among still balls, capsules, planes
+//!               and cuboids) → the stretch limit once more, against the
+//!               contacts
 //! divergence check → roll back and report, or commit the time
 //!     → tearing (cloths whose material tears: split the particles at the
 //!       ends of overstrained stretch springs)

@@ -10,7 +10,7 @@
 //! the substep: each particle near one stays on the tangent plane it
 //! started on (`collision/contact_planes.rs`) after the chains, each sweep
 //! and rounds of the stretch limit, with Coulomb friction at the end. When
-//! every obstacle is a still ball, half-space or cuboid, the lanes hold
+//! every obstacle is a still ball, capsule, half-space or cuboid, the lanes hold
 //! all the contacts (`lane_contacts.rs`): each particle is put back out
 //! after the chains and after the last sweep, where Coulomb friction
 //! undoes its slide (every second substep the springs are then kept off
@@ -77,7 +77,7 @@ pub(crate) struct XpbdScratch {
     planes: ContactPlanes,
     /// The lane of each plane's particle.
     plane_lanes: Vec<u32>,
-    /// Contacts with still balls and half-spaces, held in the lanes
+    /// Contacts with still balls, capsules, half-spaces and cuboids, held in the lanes
     /// (`lane_contacts.rs`).
     lane_contacts: LaneContacts,
     /// Velocities (m/s) in lane order, while the state stays in the lanes.
