@@ -624,14 +624,16 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
     let mut any_inside = zero;
     for (o, &shape) in law.shapes.iter().enumerate() {
         let mark = _mm256_castsi256_ps(_mm256_set1_epi32(o as i32 + 1));
+        // The lanes this shape pushed last (a lane it pushed goes on
+        // taking its normal and friction even when now clear of it).
+        let its = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+            _mm256_castps_si256(touch),
+            _mm256_castps_si256(mark),
+        ));
         let (to, n, inside, push);
         match shape {
             StillShape::Ball { centre, reach } => {
                 let centre = [centre.x, centre.y, centre.z].map(|v| _mm256_set1_ps(v));
-                let its = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
-                    _mm256_castps_si256(touch),
-                    _mm256_castps_si256(mark),
-                ));
                 let Some(out) = round_avx2(p, (centre, reach, shape.way_out()), (its, free)) else {
                     continue;
                 };
@@ -653,10 +655,6 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
                 );
                 let t = _mm256_min_ps(_mm256_max_ps(along, zero), _mm256_set1_ps(length));
                 let centre = [0, 1, 2].map(|a| _mm256_add_ps(from[a], _mm256_mul_ps(u[a], t)));
-                let its = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
-                    _mm256_castps_si256(touch),
-                    _mm256_castps_si256(mark),
-                ));
                 let Some(out) = round_avx2(p, (centre, reach, shape.way_out()), (its, free)) else {
                     continue;
                 };
@@ -689,10 +687,6 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
                 let behind = _mm256_cmp_ps::<_CMP_GT_OQ>(gap, zero);
                 // No lane behind its plane nor last pushed by it: as for
                 // the ball.
-                let its = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
-                    _mm256_castps_si256(touch),
-                    _mm256_castps_si256(mark),
-                ));
                 if _mm256_movemask_ps(_mm256_or_ps(behind, its)) == 0 {
                     continue;
                 }
@@ -762,13 +756,12 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
 
 /// Eight lanes at `p` (m) against balls of radius `reach` (m) at `centre`
 /// (m, one a lane), a lane at a squared distance up to `tiny` (m²) from
-/// its centre put out along `up` ([`StillShape::way_out`]): the point
-/// each is put back to, the outward normal,
-/// which lanes are inside (and free: `free`) and how far they are pushed
-/// (m), as the portable pass computes them; `None` when no lane is near
-/// its ball nor last pushed by this shape (`its`): the shape would change
-/// no bit, and its square root and division are the pass's dearest
-/// operations.
+/// its centre put out along `up` ([`StillShape::way_out`]): the point each
+/// is put back to, the outward normal, which lanes are inside (and free:
+/// `free`) and how far they are pushed (m), as the portable pass computes
+/// them; `None` when no lane is near its ball nor last pushed by this
+/// shape (`its`): the shape would change no bit, and its square root and
+/// division are the pass's dearest operations.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]

@@ -374,10 +374,10 @@ impl ClothSolver {
             // The integrator held every contact inside the substep: the
             // collision stage's exact pass waits for the step's last
             // substep. Self-collision moves particles after it by at most
-            // half a layer's thickness, which the next substep's first
-            // push takes back (the `fold` 5.1 → 4.1 ms a frame, its bar and
-            // floor held in the lanes); tethers pull them towards pins
-            // behind obstacles, which only the stage puts right.
+            // half a layer's thickness, which the lanes have just put
+            // right (the `fold` 5.1 → 4.4 ms a frame, its bar and floor
+            // held in the lanes); tethers pull them towards pins behind
+            // obstacles, which only the stage puts right.
             let held = outcome.contacts_held && !cloth.params.tethers;
             // What the limit left of its room, unless a stage after the
             // integrator moved the particles since.
