@@ -1647,6 +1647,30 @@ mod tests {
             .collect()
     }
 
+    /// Lane `k`'s position in `bits` ([`bits`]) of `n` lanes.
+    fn position_in(bits: &[u32], n: usize, k: usize) -> Vector {
+        Vector::new(
+            f32::from_bits(bits[k]),
+            f32::from_bits(bits[n + k]),
+            f32::from_bits(bits[2 * n + k]),
+        )
+    }
+
+    /// `n` lanes, lane `k` at `at(k)`: its position and start (m) and
+    /// inverse mass (1/kg).
+    fn placed(n: usize, at: impl Fn(usize) -> (Vector, Vector, f32)) -> Lanes {
+        let mut l = Lanes::default();
+        l.resize(n);
+        let [x, y, z, sx, sy, sz, w] = l.arrays_mut();
+        for k in 0..n {
+            let (p, start, inverse_mass) = at(k);
+            (x[k], y[k], z[k]) = (p.x, p.y, p.z);
+            (sx[k], sy[k], sz[k]) = (start.x, start.y, start.z);
+            w[k] = inverse_mass;
+        }
+        l
+    }
+
     /// Every free lane ends out of the ball and above the floor by the
     /// thickness, through the nearest point (at the centre: the top);
     /// pinned lanes and lanes already out keep their bits; the records say
@@ -1667,11 +1691,7 @@ mod tests {
         let (mut moved, mut deepest) = (0, 0.0f32);
         for k in 0..n {
             let p = Vector::new(x[k], y[k], z[k]);
-            let old = Vector::new(
-                f32::from_bits(before[k]),
-                f32::from_bits(before[n + k]),
-                f32::from_bits(before[2 * n + k]),
-            );
+            let old = position_in(&before, n, k);
             if w[k] == 0.0 {
                 assert_eq!(p, old, "pinned lane {k} moved");
                 assert_eq!(contacts.touch[k], 0);
@@ -1748,10 +1768,7 @@ mod tests {
         vector.begin(&obstacles, (THICKNESS, 0.001), n);
         portable.begin(&obstacles, (THICKNESS, 0.001), n);
         let place = || {
-            let mut l = Lanes::default();
-            l.resize(n);
-            let [x, y, z, sx, sy, sz, w] = l.arrays_mut();
-            for k in 0..n {
+            placed(n, |k| {
                 let s = k as f32 * 0.01;
                 // Into the ball's top; through the floor far from it; above
                 // the floor far from it; the rest by the ball.
@@ -1761,11 +1778,8 @@ mod tests {
                     2 => Vector::new(-4.0 - s, 0.3, 0.5),
                     _ => Vector::new(0.0, 1.0 + s, 0.48),
                 };
-                (x[k], y[k], z[k]) = (p.x, p.y, p.z);
-                (sx[k], sy[k], sz[k]) = (p.x - 0.002, p.y + 0.004, p.z);
-                w[k] = 1.0;
-            }
-            l
+                (p, p + Vector::new(-0.002, 0.004, 0.0), 1.0)
+            })
         };
         let (mut l, mut m) = (place(), place());
         vector.project(&mut l, Team::ALONE);
@@ -1911,10 +1925,7 @@ mod tests {
         };
         let n = CHUNK + 21;
         let place = || {
-            let mut l = Lanes::default();
-            l.resize(n);
-            let [x, y, z, sx, sy, sz, w] = l.arrays_mut();
-            for k in 0..n {
+            placed(n, |k| {
                 let s = k as f32;
                 // Along the axis and 20% past either end, within 1.5 radii.
                 let along = a + (b - a) * (1.4 * ((0.618 * s) % 1.0) - 0.2);
@@ -1922,11 +1933,9 @@ mod tests {
                     .normalize_or(Vector::X);
                 let p = along + dir * (1.5 * radius * ((0.37 * s) % 1.0));
                 let p = if k % 11 == 3 { nearest(p) } else { p };
-                (x[k], y[k], z[k]) = (p.x, p.y, p.z);
-                (sx[k], sy[k], sz[k]) = (p.x + 0.001, p.y - 0.002, p.z + 0.001);
-                w[k] = if k % 6 == 0 { 0.0 } else { 1.5 };
-            }
-            l
+                let w = if k % 6 == 0 { 0.0 } else { 1.5 };
+                (p, p + Vector::new(0.001, -0.002, 0.001), w)
+            })
         };
         let obstacles = [bar.with_friction(0.6)];
         let (mut vector, mut portable) = (LaneContacts::default(), LaneContacts::default());
@@ -1943,11 +1952,7 @@ mod tests {
             let [x, y, z, _, _, _, w] = l.arrays_mut();
             for k in 0..n {
                 let p = Vector::new(x[k], y[k], z[k]);
-                let old = Vector::new(
-                    f32::from_bits(before[k]),
-                    f32::from_bits(before[n + k]),
-                    f32::from_bits(before[2 * n + k]),
-                );
+                let old = position_in(&before, n, k);
                 if w[k] == 0.0 || (old - nearest(old)).length() >= reach {
                     assert_eq!(p, old, "lane {k} moved");
                     clear += 1;
@@ -2002,10 +2007,7 @@ mod tests {
         let n = 2 * CHUNK + 11;
         let motion = 0.003;
         let place = || {
-            let mut l = Lanes::default();
-            l.resize(n);
-            let [x, y, z, sx, sy, sz, w] = l.arrays_mut();
-            for k in 0..n {
+            placed(n, |k| {
                 let s = k as f32;
                 // A point of the cuboid's surface grown by up to 4 cm, in
                 // its frame, from a direction that covers faces, edges
@@ -2016,11 +2018,8 @@ mod tests {
                 let local = if k % 11 == 3 { local * 0.5 } else { local };
                 let start = pose.transform_point(local);
                 let moved = start - pose.rotation * dir.normalize() * motion;
-                (sx[k], sy[k], sz[k]) = (start.x, start.y, start.z);
-                (x[k], y[k], z[k]) = (moved.x, moved.y, moved.z);
-                w[k] = if k % 5 == 0 { 0.0 } else { 1.0 };
-            }
-            l
+                (moved, start, if k % 5 == 0 { 0.0 } else { 1.0 })
+            })
         };
         let mut contacts = LaneContacts::default();
         assert!(contacts.begin(std::slice::from_ref(&table), (THICKNESS, motion), n));
@@ -2034,11 +2033,7 @@ mod tests {
         for k in 0..n {
             let p = Vector::new(x[k], y[k], z[k]);
             let start = Vector::new(sx[k], sy[k], sz[k]);
-            let old = Vector::new(
-                f32::from_bits(before[k]),
-                f32::from_bits(before[n + k]),
-                f32::from_bits(before[2 * n + k]),
-            );
+            let old = position_in(&before, n, k);
             let hit = contact_prepared(
                 &*table.shape,
                 Analytic::of(&*table.shape),
