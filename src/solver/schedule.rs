@@ -102,8 +102,11 @@ impl ClothSolver {
             report.times.total = started.elapsed().as_secs_f64();
             return Ok(report);
         }
-        let k = self.substeps_among(cloth, obstacles, dt);
-        let edges_near = edges_within_reach(cloth, obstacles, dt) != EdgesNear::None;
+        // Which obstacles' edges may meet the cloth, once a step: for the
+        // substeps, and for xpbd's edge pass.
+        let edges = edges_within_reach(cloth, obstacles, dt);
+        let k = self.substeps_near(cloth, obstacles, dt, edges);
+        let edges_near = edges != EdgesNear::None;
         if cloth.params.self_collision && dt / k as f32 > MAX_SELF_SUBSTEP {
             return Err(ClothError::SelfCollisionNeedsSubsteps {
                 integrator: integrator.name(),
@@ -201,16 +204,29 @@ impl ClothSolver {
     /// table peaked at 12.3% stretch with the chains' 9 substeps and no
     /// planes, 4.58% at 32 with them (4.53% at the sweeps' 41); the drape
     /// over a ball stays under 5% at 12. A cloth without pins whose every
-    /// obstacle is a still ball, half-space or (out of reach) cuboid takes
-    /// at least 12 a frame at 60 Hz rather than 16 (`stability.rs` says
-    /// why).
+    /// obstacle is a still ball, capsule, half-space or (edges out of
+    /// reach) cuboid takes at least 12 a frame at 60 Hz rather than 16
+    /// (`stability.rs` says why).
     pub fn substeps_among(&self, cloth: &Cloth, obstacles: &[Obstacle], dt: f32) -> u32 {
+        let edges = edges_within_reach(cloth, obstacles, dt);
+        self.substeps_near(cloth, obstacles, dt, edges)
+    }
+
+    /// [`Self::substeps_among`], given which obstacles with edges are
+    /// within reach ([`edges_within_reach`], which the step also wants).
+    fn substeps_near(
+        &self,
+        cloth: &Cloth,
+        obstacles: &[Obstacle],
+        dt: f32,
+        edges: EdgesNear,
+    ) -> u32 {
         let lengthened =
             self.settings.substeps == Substeps::Auto && chains_lengthen(cloth, &self.settings);
         if !lengthened {
             return self.substeps_for(cloth, dt);
         }
-        match edges_within_reach(cloth, obstacles, dt) {
+        match edges {
             EdgesNear::None if unpinned_among_round(cloth, obstacles) => {
                 unpinned_substeps(cloth, &self.settings, dt)
             }
