@@ -214,31 +214,37 @@ impl Look<'_> {
         })
     }
 
-    /// Pushes the pairs of each triangle of `ts` to `out`, triangle by
-    /// triangle, each's in particle order.
-    fn triangles(
+    /// Pushes the pairs of triangle `t` to `out`, in particle order.
+    fn triangle(
         &self,
-        ts: &[usize],
+        t: usize,
         (hash, neighbours): (&SpatialHash, &MeshNeighbours),
         out: &mut Vec<SelfPair>,
     ) {
-        for &t in ts {
-            let Some(f) = self.facing(t, neighbours) else {
-                continue;
-            };
-            let first = out.len();
-            hash.for_each_inside(f.lo, f.hi, |p, xp| {
-                if let Some(pair) = self.pair(&f, (p, xp), neighbours) {
-                    out.push(pair);
-                }
-            });
-            // The hash hands them out by bucket: particle order, for the same
-            // pass whatever the table's size.
-            out[first..].sort_unstable_by_key(|q| q.particle);
+        if let Some(f) = self.facing(t, neighbours) {
+            self.facing_pairs(&f, (hash, neighbours), out);
         }
     }
 
-    /// [`Self::triangles`] on triangles `t` and `t + 1`, from one scan of
+    /// Pushes the pairs of the triangle `f` to `out`, in particle order.
+    fn facing_pairs(
+        &self,
+        f: &Facing,
+        (hash, neighbours): (&SpatialHash, &MeshNeighbours),
+        out: &mut Vec<SelfPair>,
+    ) {
+        let first = out.len();
+        hash.for_each_inside(f.lo, f.hi, |p, xp| {
+            if let Some(pair) = self.pair(f, (p, xp), neighbours) {
+                out.push(pair);
+            }
+        });
+        // The hash hands them out by bucket: particle order, for the same
+        // pass whatever the table's size.
+        out[first..].sort_unstable_by_key(|q| q.particle);
+    }
+
+    /// [`Self::triangle`] on triangles `t` and `t + 1`, from one scan of
     /// the hash over the box around both (each particle in it tested
     /// against the triangles whose own box holds it: the same pairs);
     /// `second` is scratch.
@@ -248,21 +254,25 @@ impl Look<'_> {
         (hash, neighbours): (&SpatialHash, &MeshNeighbours),
         (out, second): (&mut Vec<SelfPair>, &mut Vec<SelfPair>),
     ) {
-        let (Some(f), Some(g)) = (self.facing(t, neighbours), self.facing(t + 1, neighbours))
-        else {
-            return self.triangles(&[t, t + 1], (hash, neighbours), out);
+        let both = [self.facing(t, neighbours), self.facing(t + 1, neighbours)];
+        let [Some(f), Some(g)] = &both else {
+            // One has no area (or neither): the other alone.
+            for f in both.iter().flatten() {
+                self.facing_pairs(f, (hash, neighbours), out);
+            }
+            return;
         };
         let inside = |xp: Vector, f: &Facing| xp.cmpge(f.lo).all() && xp.cmple(f.hi).all();
         let first = out.len();
         second.clear();
         hash.for_each_inside(f.lo.min(g.lo), f.hi.max(g.hi), |p, xp| {
-            if inside(xp, &f) {
-                if let Some(pair) = self.pair(&f, (p, xp), neighbours) {
+            if inside(xp, f) {
+                if let Some(pair) = self.pair(f, (p, xp), neighbours) {
                     out.push(pair);
                 }
             }
-            if inside(xp, &g) {
-                if let Some(pair) = self.pair(&g, (p, xp), neighbours) {
+            if inside(xp, g) {
+                if let Some(pair) = self.pair(g, (p, xp), neighbours) {
                     second.push(pair);
                 }
             }
@@ -540,8 +550,8 @@ impl SelfContacts {
                 let pair = [t, t + 1].map(|t| t < end && !patches.quiet_triangle(t));
                 match pair {
                     [true, true] => look.two_triangles(t, (hash, neighbours), (list, second)),
-                    [true, false] => look.triangles(&[t], (hash, neighbours), list),
-                    [false, true] => look.triangles(&[t + 1], (hash, neighbours), list),
+                    [true, false] => look.triangle(t, (hash, neighbours), list),
+                    [false, true] => look.triangle(t + 1, (hash, neighbours), list),
                     [false, false] => {}
                 }
                 t += 2;

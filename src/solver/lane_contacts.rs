@@ -1108,14 +1108,7 @@ fn maybe_inside(e: &Eight, law: &Law) -> bool {
     let mut any = false;
     for &shape in law.shapes {
         match shape {
-            StillShape::Ball { centre, reach } => {
-                let near = near_ball(reach);
-                for k in 0..W {
-                    let d = [p[0][k] - centre.x, p[1][k] - centre.y, p[2][k] - centre.z];
-                    any |= d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < near;
-                }
-            }
-            StillShape::Capsule { reach, .. } => {
+            StillShape::Ball { reach, .. } | StillShape::Capsule { reach, .. } => {
                 let near = near_ball(reach);
                 for k in 0..W {
                     let c = shape.centre_for([p[0][k], p[1][k], p[2][k]]);
@@ -1488,6 +1481,7 @@ fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
         let mut inside = [false; W];
         match shape {
             StillShape::Ball { reach, .. } | StillShape::Capsule { reach, .. } => {
+                let (up, tiny) = shape.way_out();
                 for k in 0..W {
                     let c = shape.centre_for([e.p[0][k], e.p[1][k], e.p[2][k]]);
                     let d = [e.p[0][k] - c[0], e.p[1][k] - c[1], e.p[2][k] - c[2]];
@@ -1495,7 +1489,6 @@ fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
                     let length = d2.sqrt();
                     let recip = 1.0 / length;
                     // At the centre itself: out along `up`.
-                    let (up, tiny) = shape.way_out();
                     let at_centre = d2 <= tiny;
                     for a in 0..3 {
                         let up = [up.x, up.y, up.z][a];
