@@ -587,29 +587,38 @@ impl SelfContacts {
             h,
         } = *params;
         let mut touching = 0;
+        // The pairs come by triangle (a look's blocks join in triangle
+        // order): what depends on the triangle alone is found once for
+        // its run of pairs, and found again after any pair moved a
+        // particle (it may have moved a corner). The same values as a
+        // pair's own: the same expressions of the same positions.
+        let mut near: Option<Near> = None;
         for pair in &self.pairs {
-            let Some(tri) = topology.triangles.get(pair.triangle as usize) else {
-                continue;
+            let f = match &mut near {
+                Some(f) if f.t == pair.triangle => f,
+                _ => {
+                    let Some(&tri) = topology.triangles.get(pair.triangle as usize) else {
+                        continue;
+                    };
+                    near.insert(Near::of(pair.triangle, tri, x))
+                }
             };
-            let [ia, ib, ic] = tri.map(|i| i as usize);
+            let [ia, ib, ic] = f.tri;
             let ip = pair.particle as usize;
-            let (a, b, c, xp) = (x[ia], x[ib], x[ic], x[ip]);
-            let (e1, e2) = (b - a, c - a);
-            let normal = e1.cross(e2);
+            let (a, xp, normal, len2) = (f.a, x[ip], f.normal, f.len2);
             // Surely further than the thickness out on its side, told
             // without the root and the division (most pairs of layers at
             // rest; a fifth of the `stack`'s frame went to this pass). A
             // hair of margin: a pair near the thickness takes the exact
             // test below, so the pass keeps its bits.
             let out = (xp - a).dot(normal) * pair.side;
-            let len2 = normal.length_squared();
             if out > 0.0 && out * out > thickness * thickness * len2 * (1.0 + 1.0e-4) {
                 continue;
             }
-            let len = len2.sqrt();
-            if !is_positive(len) {
+            let Some((len, slack)) = f.rim_slack(thickness) else {
                 continue;
-            }
+            };
+            let (e1, e2) = (f.e1, f.e2);
             let n = normal * (pair.side / len);
             let d = (xp - a).dot(n);
             if d >= thickness {
@@ -622,7 +631,6 @@ impl SelfContacts {
                 continue;
             }
             let bary = barycentric(xp - n * d - a, e1, e2);
-            let slack = rim_slack(rim(thickness, (e1, e2)), (e1, e2), len);
             if (0..3).any(|k| bary[k] < -slack[k]) {
                 continue;
             }
@@ -664,6 +672,8 @@ impl SelfContacts {
             v[ia] -= j * (wa * u);
             v[ib] -= j * (wb * vb);
             v[ic] -= j * (wc * w);
+            // Positions moved: the next pair finds its triangle afresh.
+            near = None;
         }
         for pair in &self.edge_pairs {
             let ([ia, ib], [ip, iq]) = (
@@ -702,6 +712,53 @@ impl SelfContacts {
             }
         }
         touching
+    }
+}
+
+/// A triangle as [`SelfContacts::resolve`] tests its run of pairs: its
+/// corners, first corner `a` and edges `e1`, `e2` (m), `e1 × e2` and its
+/// squared length, and, once a pair needs them, its length and the rim's
+/// slack ([`rim_slack`]).
+struct Near {
+    t: u32,
+    tri: [usize; 3],
+    a: Vector,
+    e1: Vector,
+    e2: Vector,
+    normal: Vector,
+    len2: f32,
+    slack: Option<Option<(f32, [f32; 3])>>,
+}
+
+impl Near {
+    /// Triangle `t` with corners `tri` at positions `x`.
+    #[inline]
+    fn of(t: u32, tri: [u32; 3], x: &[Vector]) -> Near {
+        let tri = tri.map(|i| i as usize);
+        let [a, b, c] = tri.map(|i| x[i]);
+        let (e1, e2) = (b - a, c - a);
+        let normal = e1.cross(e2);
+        Near {
+            t,
+            tri,
+            a,
+            e1,
+            e2,
+            normal,
+            len2: normal.length_squared(),
+            slack: None,
+        }
+    }
+
+    /// `|e1 × e2|` and the rim's slack for layers `thickness` thick (m);
+    /// none for a triangle of no area. Found at the first call.
+    #[inline]
+    fn rim_slack(&mut self, thickness: f32) -> Option<(f32, [f32; 3])> {
+        *self.slack.get_or_insert_with(|| {
+            let len = self.len2.sqrt();
+            let edges = (self.e1, self.e2);
+            is_positive(len).then(|| (len, rim_slack(rim(thickness, edges), edges, len)))
+        })
     }
 }
 
