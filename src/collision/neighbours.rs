@@ -154,6 +154,11 @@ impl MeshNeighbours {
         row(&self.joined_start, &self.joined, p)
     }
 
+    /// The partners of `p` along triangle edges (its one-ring), ascending.
+    pub fn ring(&self, p: u32) -> &[u32] {
+        row(&self.ring_start, &self.ring, p)
+    }
+
     /// The far ends `j > p` of the triangle edges at `p`, ascending.
     pub fn edges_from(&self, p: u32) -> &[u32] {
         row(&self.edge_start, &self.edges, p)

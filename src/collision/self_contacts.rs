@@ -297,54 +297,62 @@ impl Look<'_> {
         let (a, b) = (x[ia as usize], x[ib as usize]);
         let u = b - a;
         let length = u.length();
-        // An edge within reach has its ends within reach plus its length
-        // (twice this one's, or a quarter over the mesh's longest as
-        // stretched: any mesh's): the box around this edge so padded holds
-        // both, and the hash's scan of it tests every point it hands out
-        // (the points of its cells, tested here one by one, were a tenth
-        // of the `fold`'s frame).
-        let span = (2.0 * length).max(1.25 * neighbours.longest());
+        // An edge within reach has its nearer end within reach plus half
+        // its length (this one's length, or 0.625 of the mesh's longest
+        // edge as stretched: the edge is at most twice this one, or a
+        // quarter over the longest): the box around this edge so padded
+        // holds that end, and each edge is taken from it (from its lower
+        // end when both are inside). Padded by the whole length, the box
+        // held 2.4 times the particles (the border edges were a sixth of
+        // the `stack`'s frame).
+        let span = length.max(0.625 * neighbours.longest());
         let pad = Vector::splat(self.reach + span);
         let (lo, hi) = (a.min(b) - pad, a.max(b) + pad);
+        // The hash's own test of its points (the same positions).
+        let inside = |p: Vector| p.cmpge(lo).all() && p.cmple(hi).all();
         let sheet = neighbours.sheet([ia, ib, ib], self.reach + 2.0 * length);
         let borders = neighbours.border_edges();
         let first = out.len();
         let length2 = u.length_squared();
-        hash.for_each_inside(lo, hi, |p, xp| {
-            if sheet.holds(p) {
+        hash.for_each_inside(lo, hi, |e, xe| {
+            if sheet.holds(e) || e == ia || e == ib {
                 return;
             }
-            // How far p lies beyond reach of the border edge: an edge from p
+            // How far e lies beyond reach of the border edge: an edge from e
             // with a point within reach of it is at least that long (a hair
             // more spares the rounding: the pairs are those of the look
             // without this test).
             let along = if length2 > 0.0 {
-                ((xp - a).dot(u) / length2).clamp(0.0, 1.0)
+                ((xe - a).dot(u) / length2).clamp(0.0, 1.0)
             } else {
                 0.0
             };
-            let beyond = (xp - a - u * along).length() - self.reach;
+            let beyond = (xe - a - u * along).length() - self.reach;
             let shortest2 = if beyond > 0.0 {
                 beyond * beyond * (1.0 - 1.0e-3)
             } else {
                 0.0
             };
-            for &q in neighbours.edges_from(p) {
-                if q == ia || q == ib || p == ia || p == ib || sheet.holds(q) {
+            for &f in neighbours.ring(e) {
+                let xf = x[f as usize];
+                // Each edge once: from its lower end when both ends are
+                // in the box.
+                if f < e && inside(xf) {
                     continue;
                 }
-                let v = x[q as usize] - xp;
-                if v.length_squared() < shortest2 {
+                if f == ia || f == ib || (xf - xe).length_squared() < shortest2 || sheet.holds(f) {
                     continue;
                 }
+                let (p, q) = (e.min(f), e.max(f));
                 // Two border edges meet from both sides: keep the lower one's.
                 if [p, q] < [ia, ib] && borders.binary_search(&[p, q]).is_ok() {
                     continue;
                 }
-                let Some((s, t, n)) = closest(a, u, xp, v) else {
+                let (xp, xq) = (x[p as usize], x[q as usize]);
+                let Some((s, t, n)) = closest(a, u, xp, xq - xp) else {
                     continue;
                 };
-                let gap = (a + u * s - xp - v * t).dot(n);
+                let gap = (a + u * s - xp - (xq - xp) * t).dot(n);
                 if gap.abs() < self.reach {
                     out.push(EdgePair {
                         border: [ia, ib],
