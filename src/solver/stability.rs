@@ -101,16 +101,20 @@ const XPBD_LIMITED_CHAIN_REACH: f32 = 1.5 * XPBD_CHAIN_REACH;
 /// Automatic substeps a second with the chain solves for a cloth without
 /// pins on still balls and half-spaces, of a material with a stretch limit,
 /// on a grid whose longer side has up to [`XPBD_LIMITED_CHAIN_SIDE`]
-/// particles; they grow with the square of the side past it, whatever the
-/// stiffness. Nothing hangs such a cloth: its stretch is a landing's,
-/// which the limit's passes hold after the chains and one sweep, and how
-/// far they carry a correction is counted in particles (a stiffer spring
-/// the chains meet just as exactly). Measured, peak stretch over every
-/// frame of the drape (BENCHMARKS.md, twenty-fourth session), silk, cotton,
-/// denim, leather and canvas: at most 4.85% with 12 substeps at N = 80 to
-/// 128; at N = 160 5.18–5.75% with 12, 4.72–5.00% with 16, 4.64–4.88%
-/// with 20; at N = 192 6.9–9.2% with 12, 4.71–5.24% with 20, silk 4.92%
-/// with 27; at N = 256 4.79–5.71% with 32, 4.63–4.75% with 48.
+/// particles; past it they grow with the side ([`limited_chain_substeps`]),
+/// whatever the stiffness. Nothing hangs such a cloth: its stretch is a
+/// landing's, which the limit's passes hold after the chains and one
+/// sweep, and how far they carry a correction is counted in particles (a
+/// stiffer spring the chains meet just as exactly). Measured, peak stretch
+/// over every frame of the drape (BENCHMARKS.md, twenty-fourth session),
+/// silk, cotton, denim, leather and canvas: at most 4.85% with 12 substeps
+/// at N = 80 to 128. With the limit over-relaxed by 1.9
+/// (`grid_sweep::LIMIT_OVER_RELAXATION`; thirtieth session, 60 frames):
+/// 4.51–4.55% at N = 96 and 128 with 12, 4.51–4.52% at N = 160 with 14,
+/// 4.53–4.56% at 192 with 16, 4.56–4.62% at 224 with 18, 4.59–4.70% at
+/// 256 with 20 (cotton 8.3% with 16). With 1.5 the limit stayed unsettled
+/// through a landing and the rule grew with the square of the side: at
+/// N = 256 4.79–5.71% with 32, 4.63–4.75% with 48.
 /// [`XPBD_LIMITED_CHAIN_REACH`] gave 16 substeps at N = 128 and 64 at 256
 /// to cotton, 49 and 193 to canvas. A hanging cloth is another matter: the
 /// `pins` sheet at N = 128 hung by its centre peaks at 10% with 16
@@ -124,14 +128,20 @@ const _: () = assert!(XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND >= XPBD_UNPINNED_SU
 /// [`XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND`] holds unscaled.
 const XPBD_LIMITED_CHAIN_SIDE: f32 = 128.0;
 
+/// Particles along the side per substep a frame at 60 Hz that the side
+/// rule adds past [`XPBD_LIMITED_CHAIN_SIDE`]: 12 at N = 128, 20 at 256.
+const XPBD_LIMITED_CHAIN_PARTICLES_PER_SUBSTEP: f32 = 16.0;
+
 /// The automatic substeps of a frame step of `dt` seconds with the chain
 /// solves for a cloth of a material with a stretch limit, without pins, on
 /// still balls and half-spaces, on a grid whose longer side has `side`
-/// particles: [`XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND`], times the square
-/// of the side over [`XPBD_LIMITED_CHAIN_SIDE`] past it.
+/// particles: [`XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND`] up to
+/// [`XPBD_LIMITED_CHAIN_SIDE`], and past it one substep a frame at 60 Hz
+/// more for every [`XPBD_LIMITED_CHAIN_PARTICLES_PER_SUBSTEP`] particles.
 fn limited_chain_substeps(side: f32, dt: f32) -> f32 {
-    let scale = (side / XPBD_LIMITED_CHAIN_SIDE).max(1.0);
-    substeps_at_rate(dt, XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND * scale * scale)
+    let past = (side - XPBD_LIMITED_CHAIN_SIDE).max(0.0);
+    let more = 60.0 * past / XPBD_LIMITED_CHAIN_PARTICLES_PER_SUBSTEP;
+    substeps_at_rate(dt, XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND + more)
 }
 
 /// The whole substeps of a frame step of `dt` seconds at `per_second`
@@ -341,12 +351,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_limited_cloths_substeps_grow_with_the_square_of_its_side_past_128() {
+    fn a_limited_cloths_substeps_grow_with_its_side_past_128() {
         let dt = 1.0 / 60.0;
         assert_eq!(limited_chain_substeps(64.0, dt), 12.0);
         assert_eq!(limited_chain_substeps(128.0, dt), 12.0);
-        assert_eq!(limited_chain_substeps(160.0, dt), 19.0);
-        assert_eq!(limited_chain_substeps(256.0, dt), 48.0);
-        assert_eq!(limited_chain_substeps(256.0, 2.0 * dt), 96.0);
+        assert_eq!(limited_chain_substeps(160.0, dt), 14.0);
+        assert_eq!(limited_chain_substeps(256.0, dt), 20.0);
+        assert_eq!(limited_chain_substeps(256.0, 2.0 * dt), 40.0);
     }
 }
