@@ -128,8 +128,9 @@ const _: () = assert!(XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND >= XPBD_UNPINNED_SU
 /// [`XPBD_LIMITED_CHAIN_SUBSTEPS_PER_SECOND`] holds unscaled.
 const XPBD_LIMITED_CHAIN_SIDE: f32 = 128.0;
 
-/// Particles along the side per substep a frame at 60 Hz that the side
-/// rule adds past [`XPBD_LIMITED_CHAIN_SIDE`]: 12 at N = 128, 20 at 256.
+/// Past [`XPBD_LIMITED_CHAIN_SIDE`], the side rule adds a substep a frame
+/// at 60 Hz for every this many particles along the side: 12 substeps at
+/// N = 128, 20 at 256.
 const XPBD_LIMITED_CHAIN_PARTICLES_PER_SUBSTEP: f32 = 16.0;
 
 /// The automatic substeps of a frame step of `dt` seconds with the chain
