@@ -5,8 +5,6 @@
 //! at the edges, the same values either way. Element by element, the
 //! copies were 7% of the drape's frame at N = 128 (perf, one thread).
 
-use crate::parallel::{Disjoint, Team};
-
 /// Rows a thread takes at a time, both ways: a multiple of [`BLOCK`], and
 /// the chains a thread takes at a time along rows (`grid_chains::CHUNK`),
 /// so that a row is copied in, solved and copied back on one thread.
@@ -15,90 +13,84 @@ pub(super) const CHUNK: usize = 32;
 /// Side of the blocks transposed in registers (AVX2's 8 `f32`).
 const BLOCK: usize = 8;
 
-/// Checks, once a transpose, what its unchecked copies rely on: every
-/// array holds the whole grid, and each lane of a row has its column.
-fn assert_within(pairs: &[(&[f32], Disjoint<f32>)], column: &[u32], (cols, rows): (usize, usize)) {
-    let n = cols * rows;
-    assert!(pairs.iter().all(|(a, b)| a.len() >= n && b.len() >= n) && column.len() == cols);
-    assert!(column.iter().all(|&c| (c as usize) < cols));
+/// The floats a scratch of a grid of `shape` (columns, rows) takes: its
+/// rows padded to whole chunks ([`scratch_at`]).
+pub(super) fn scratch_len((cols, rows): (usize, usize)) -> usize {
+    rows.div_ceil(CHUNK) * CHUNK * cols
 }
 
-/// Copies each pair's lanes (row-major, `shape` = (columns, rows), lanes
-/// of a row in the plan's order) into its scratch (column-major: lane `p`
-/// of row `r` to `column[p] · rows + r`), a chunk of lanes along the rows a
-/// thread; in registers when `simd` (only where the CPU has AVX2).
-///
-/// # Safety
-/// The scratch arrays are used by no one else meanwhile, and the lane
-/// arrays not written.
-pub(super) unsafe fn transpose_in(
-    pairs: &[(&[f32], Disjoint<f32>)],
-    column: &[u32],
-    shape: (usize, usize),
-    team: Team,
-    simd: bool,
-) {
-    // SAFETY: the caller's promise.
-    unsafe { transpose(pairs, column, shape, (team, simd), Way::In) }
+/// Where the scratch holds column `c` of row `r` of a grid of `cols`
+/// columns: by chunks of [`CHUNK`] rows, each chunk column by column
+/// (`CHUNK` floats of a column side by side). A chunk's rows are one
+/// thread's, in one stretch of memory: with the whole scratch column by
+/// column (`c · rows + r`), each thread's rows were a quarter of every
+/// 512 bytes at N = 128, and the CPU's prefetchers, fetching the lines
+/// next to those a core touched, took the other core's lines away from
+/// it (two threads writing alternate 256 bytes of an array took four
+/// times as long as one writing all of it; measured).
+#[inline(always)]
+pub(super) fn scratch_at(c: usize, r: usize, cols: usize) -> usize {
+    (r / CHUNK) * CHUNK * cols + c * CHUNK + r % CHUNK
 }
 
-/// The inverse of [`transpose_in`]: each pair's scratch back into its
-/// lanes, a chunk of rows a thread.
-///
-/// # Safety
-/// As for [`transpose_in`], the roles swapped.
-pub(super) unsafe fn transpose_out(
-    pairs: &[(&[f32], Disjoint<f32>)],
-    column: &[u32],
-    shape: (usize, usize),
-    team: Team,
-    simd: bool,
-) {
-    // SAFETY: the caller's promise.
-    unsafe { transpose(pairs, column, shape, (team, simd), Way::Out) }
-}
+/// An array copied into another, as raw pointers to their first elements
+/// (the copies of different chunks of rows run at once on different
+/// threads, each in its own part of both).
+pub(super) type Pair = (*const f32, *mut f32);
 
 /// Which way a transpose copies: lanes into the scratch, or back.
 #[derive(Clone, Copy)]
-enum Way {
+pub(super) enum Way {
     In,
     Out,
 }
 
-/// [`transpose_in`] or [`transpose_out`]: chunks of lanes along the rows
-/// going in, of rows coming back (each chunk writes only its own part).
-///
-/// # Safety
-/// As for [`transpose_in`] (for the way in) and [`transpose_out`].
-unsafe fn transpose(
-    pairs: &[(&[f32], Disjoint<f32>)],
+/// Checks, once a transpose, what its unchecked copies rely on: `lens`,
+/// the lengths of each pair's arrays (from, to), hold the whole grid as
+/// lanes and as scratch ([`scratch_len`]), and each lane of a row has its
+/// column.
+pub(super) fn assert_within(
+    lens: &[(usize, usize)],
     column: &[u32],
-    shape: (usize, usize),
-    (team, simd): (Team, bool),
+    (cols, rows): (usize, usize),
     way: Way,
 ) {
-    assert_within(pairs, column, shape);
-    // Both ways a chunk of rows: the rows a band of the sweep holds, on
-    // the thread that holds them (the rows' chains are then solved there;
-    // in by chunks of lanes, every chunk read rows the other thread had
-    // last written).
-    let rows = shape.1;
-    team.sum_count(rows.div_ceil(CHUNK), |q| {
-        let part = q * CHUNK..((q + 1) * CHUNK).min(rows);
-        for &(from, to) in pairs {
-            let copy = Copy {
-                from: from.as_ptr(),
-                to: to.as_ptr(),
-                column,
-                shape,
-            };
-            // SAFETY: within both arrays (asserted); going in, the scratch
-            // elements of this chunk's rows are its alone; coming back,
-            // these rows' lanes.
-            unsafe { copy_chunk(&copy, part.clone(), way, simd) };
-        }
-        0
-    });
+    let (n, padded) = (cols * rows, scratch_len((cols, rows)));
+    let (from, to) = match way {
+        Way::In => (n, padded),
+        Way::Out => (padded, n),
+    };
+    assert!(lens.iter().all(|&(a, b)| a >= from && b >= to) && column.len() == cols);
+    assert!(column.iter().all(|&c| (c as usize) < cols));
+}
+
+/// Copies the rows `part` (a chunk of [`CHUNK`], the last maybe shorter)
+/// of each pair's lanes (row-major, `shape` = (columns, rows), lanes of a
+/// row in the plan's order) into its scratch (lane `p` of row `r` to
+/// [`scratch_at`]`(column[p], r)`) going in, or back coming out; in
+/// registers when `simd` (only where the CPU has AVX2).
+///
+/// # Safety
+/// The pairs passed [`assert_within`] for `way`; `part` is within the
+/// grid; no other thread uses these rows of the arrays written, nor
+/// writes those of the arrays read, meanwhile.
+pub(super) unsafe fn copy_rows(
+    pairs: &[Pair],
+    column: &[u32],
+    shape: (usize, usize),
+    part: std::ops::Range<usize>,
+    (way, simd): (Way, bool),
+) {
+    for &(from, to) in pairs {
+        let copy = Copy {
+            from,
+            to,
+            column,
+            shape,
+        };
+        // SAFETY: the caller's promise.
+        unsafe { copy_chunk(&copy, part.clone(), way, simd) };
+    }
 }
 
 /// One chunk of one array's transpose, in AVX2 registers when `simd`.
@@ -160,8 +152,9 @@ unsafe fn out_chunk_avx2(copy: &Copy, rows: std::ops::Range<usize>) {
 /// AVX2 function.
 #[inline(always)]
 unsafe fn in_chunk(c: &Copy, rows: std::ops::Range<usize>, simd: bool) {
-    let (cols, height) = c.shape;
+    let cols = c.shape.0;
     let col = |p: usize| c.column[p] as usize;
+    let at = |p: usize, r: usize| scratch_at(col(p), r, cols);
     #[cfg_attr(not(target_arch = "x86_64"), allow(unused_mut))]
     let mut p0 = 0;
     #[cfg(target_arch = "x86_64")]
@@ -173,7 +166,7 @@ unsafe fn in_chunk(c: &Copy, rows: std::ops::Range<usize>, simd: bool) {
             unsafe {
                 block(
                     std::array::from_fn(|i| c.from.add((r0 + i) * cols + p0)),
-                    std::array::from_fn(|j| c.to.add(col(p0 + j) * height + r0)),
+                    std::array::from_fn(|j| c.to.add(at(p0 + j, r0))),
                 )
             };
             r0 += BLOCK;
@@ -181,7 +174,7 @@ unsafe fn in_chunk(c: &Copy, rows: std::ops::Range<usize>, simd: bool) {
         for p in p0..p0 + BLOCK {
             for r in r0..rows.end {
                 // SAFETY: in bounds, as above.
-                unsafe { *c.to.add(col(p) * height + r) = *c.from.add(r * cols + p) };
+                unsafe { *c.to.add(at(p, r)) = *c.from.add(r * cols + p) };
             }
         }
         p0 += BLOCK;
@@ -190,7 +183,7 @@ unsafe fn in_chunk(c: &Copy, rows: std::ops::Range<usize>, simd: bool) {
     for p in p0..cols {
         for r in rows.clone() {
             // SAFETY: in bounds, as above.
-            unsafe { *c.to.add(col(p) * height + r) = *c.from.add(r * cols + p) };
+            unsafe { *c.to.add(at(p, r)) = *c.from.add(r * cols + p) };
         }
     }
 }
@@ -202,8 +195,9 @@ unsafe fn in_chunk(c: &Copy, rows: std::ops::Range<usize>, simd: bool) {
 /// As for [`in_chunk`].
 #[inline(always)]
 unsafe fn out_chunk(c: &Copy, rows: std::ops::Range<usize>, simd: bool) {
-    let (cols, height) = c.shape;
+    let cols = c.shape.0;
     let col = |p: usize| c.column[p] as usize;
+    let at = |p: usize, r: usize| scratch_at(col(p), r, cols);
     #[cfg_attr(not(target_arch = "x86_64"), allow(unused_mut))]
     let mut p0 = 0;
     #[cfg(target_arch = "x86_64")]
@@ -214,7 +208,7 @@ unsafe fn out_chunk(c: &Copy, rows: std::ops::Range<usize>, simd: bool) {
             // 8`, to rows `r0..r0 + 8` of those lanes: in bounds.
             unsafe {
                 block(
-                    std::array::from_fn(|j| c.from.add(col(p0 + j) * height + r0)),
+                    std::array::from_fn(|j| c.from.add(at(p0 + j, r0))),
                     std::array::from_fn(|i| c.to.add((r0 + i) * cols + p0)),
                 )
             };
@@ -223,7 +217,7 @@ unsafe fn out_chunk(c: &Copy, rows: std::ops::Range<usize>, simd: bool) {
         for r in r0..rows.end {
             for p in p0..p0 + BLOCK {
                 // SAFETY: in bounds, as above.
-                unsafe { *c.to.add(r * cols + p) = *c.from.add(col(p) * height + r) };
+                unsafe { *c.to.add(r * cols + p) = *c.from.add(at(p, r)) };
             }
         }
         p0 += BLOCK;
@@ -232,7 +226,7 @@ unsafe fn out_chunk(c: &Copy, rows: std::ops::Range<usize>, simd: bool) {
     for p in p0..cols {
         for r in rows.clone() {
             // SAFETY: in bounds, as above.
-            unsafe { *c.to.add(r * cols + p) = *c.from.add(col(p) * height + r) };
+            unsafe { *c.to.add(r * cols + p) = *c.from.add(at(p, r)) };
         }
     }
 }
@@ -295,7 +289,7 @@ mod tests {
     use crate::math::simd_available;
 
     /// A grid's arrays transposed in and out, with `simd` or not, on
-    /// `threads`: (the scratch, the lanes back).
+    /// `threads`, a chunk of rows an item: (the scratch, the lanes back).
     fn round_trip(
         (cols, rows): (usize, usize),
         column: &[u32],
@@ -303,25 +297,34 @@ mod tests {
         threads: usize,
     ) -> (Vec<f32>, Vec<f32>) {
         let n = cols * rows;
+        let shape = (cols, rows);
         let lanes: Vec<f32> = (0..n).map(|i| i as f32 * 0.5 - 7.0).collect();
-        let (mut scratch, mut back) = (vec![f32::NAN; n], vec![f32::NAN; n]);
+        // Finite (the padding compares equal), and no lane's value.
+        let mut scratch = vec![f32::MAX; scratch_len(shape)];
+        let mut back = vec![f32::NAN; n];
+        let (into, out) = (
+            [(lanes.as_ptr(), scratch.as_mut_ptr())],
+            [(scratch.as_ptr(), back.as_mut_ptr())],
+        );
+        assert_within(&[(n, scratch.len())], column, shape, Way::In);
+        assert_within(&[(scratch.len(), n)], column, shape, Way::Out);
+        // Raw pointers, shared by the items (each copies its own rows).
+        struct Shared([Pair; 1], [Pair; 1]);
+        // SAFETY: the items use disjoint rows.
+        unsafe impl Sync for Shared {}
+        let shared = &Shared(into, out);
         crate::parallel::on_threads(threads, |team| {
-            // SAFETY: the arrays are this test's alone.
-            unsafe {
-                transpose_in(
-                    &[(&lanes[..], Disjoint::new(&mut scratch[..]))],
-                    column,
-                    (cols, rows),
-                    team,
-                    simd,
-                );
-                transpose_out(
-                    &[(&scratch[..], Disjoint::new(&mut back[..]))],
-                    column,
-                    (cols, rows),
-                    team,
-                    simd,
-                );
+            for way in [Way::In, Way::Out] {
+                team.sum_count(rows.div_ceil(CHUNK), |q| {
+                    let part = q * CHUNK..((q + 1) * CHUNK).min(rows);
+                    let pairs = match way {
+                        Way::In => &shared.0,
+                        Way::Out => &shared.1,
+                    };
+                    // SAFETY: checked above; each item its own rows.
+                    unsafe { copy_rows(pairs, column, shape, part, (way, simd)) };
+                    0
+                });
             }
         });
         assert_eq!(back, lanes, "the round trip gives the lanes back");
@@ -343,7 +346,8 @@ mod tests {
             for (p, &c) in column.iter().enumerate() {
                 for r in 0..rows {
                     let lane = (r * cols + p) as f32 * 0.5 - 7.0;
-                    assert_eq!(scratch[c as usize * rows + r], lane, "lane {p} row {r}");
+                    let at = scratch_at(c as usize, r, cols);
+                    assert_eq!(scratch[at], lane, "lane {p} row {r}");
                 }
             }
             for threads in [1, 2] {

@@ -18,17 +18,26 @@
 //! Layout: chains are lanes. A column chain runs down the rows of the
 //! sweep's lanes (`grid_sweep::Lanes`), a lane of each row, so the columns
 //! are solved side by side, a vector of chains a step, with no gather. The
-//! rows are first copied into a transposed scratch where they are columns,
-//! solved the same way, and copied back. Chains are independent: they are
-//! cut into chunks of [`CHUNK`] lanes that threads take in any order, with
-//! the bits of one thread; no fused multiply-add, so the AVX2 build and the
-//! baseline give the same bits too.
+//! rows are copied, a chunk of [`CHUNK`] rows at a time, into a transposed
+//! scratch where they are columns, solved the same way, and copied back,
+//! each chunk by one item on one thread (the rows a band of the sweeps
+//! holds). Chains are independent: they are cut into chunks of [`CHUNK`]
+//! that threads take in any order, with the bits of one thread; no fused
+//! multiply-add, so the AVX2 build and the baseline give the same bits
+//! too.
+//!
+//! Two threads share the scratch, so what a thread writes is its own
+//! stretch of memory: a chunk's rows in the transposed scratch, and
+//! separate work arrays for the rows and the columns (each thread's share
+//! interleaved with the other's, or one array written by both in turn,
+//! the CPU's prefetchers and the cores' caches moved the lines between
+//! the cores: two threads took longer over the chain solves than one).
 
 use crate::cloth::{Cloth, SpringKind};
 use crate::math::simd_available;
 use crate::parallel::{Disjoint, Team};
 
-use super::chain_transpose::{transpose_in, transpose_out};
+use super::chain_transpose::{assert_within, copy_rows, scratch_len, Pair, Way};
 use super::grid_sweep::{GridPlan, Lanes};
 use super::staggered::Staggered;
 
@@ -47,9 +56,12 @@ const PARALLEL_MIN_SPRINGS: usize = 4096;
 #[derive(Debug, Default)]
 pub(crate) struct ChainScratch {
     /// Per chain element: the spring's unit direction (x, y, z), then the
-    /// forward pass's eliminated super-diagonal and right-hand side.
+    /// forward pass's eliminated super-diagonal and right-hand side; five
+    /// arrays for the rows (in the transposed scratch's layout), five for
+    /// the columns.
     work: Staggered,
-    /// The rows transposed (lane `c · rows + r` holds particle `(r, c)`):
+    /// The rows transposed (element [`super::chain_transpose::scratch_at`]`(c,
+    /// r)` holds particle `(r, c)`):
     /// x, y, z, inverse mass, the rest length (m) of the row's stretch
     /// spring leaving it, and that spring's multiplier (N·s²).
     rows: Staggered,
@@ -70,23 +82,67 @@ const TW: usize = 3;
 const TREST: usize = 4;
 const TLAMBDA: usize = 5;
 
-/// One set of chains side by side: chain `j` has elements `k · stride + j`
-/// for `k` in `0..len`, and the spring from element `k` to `k + 1` has its
-/// rest length and multiplier at element `k`.
+/// One set of chains side by side: chain `j` has elements `k · stride +
+/// first(j)` for `k` in `0..len`, where chain `j` of a chunk of [`CHUNK`]
+/// starts at `first(j) = (j / CHUNK) · pitch + j % CHUNK`; the spring from
+/// element `k` to `k + 1` has its rest length and multiplier at element
+/// `k`. Down the columns of the lanes, the pitch is `CHUNK` (`first(j) =
+/// j`); along the rows, in the transposed scratch
+/// ([`super::chain_transpose::scratch_at`]), a chunk's stretch of memory.
 #[derive(Clone, Copy)]
 struct Chains<'a> {
     x: Disjoint<'a, f32>,
     y: Disjoint<'a, f32>,
     z: Disjoint<'a, f32>,
-    w: &'a [f32],
-    rest: &'a [f32],
+    /// Inverse masses and rest lengths: read only while the chains are
+    /// solved (raw: along the rows, a chunk's are copied in by the item
+    /// that solves it, while other items solve theirs).
+    w: *const f32,
+    rest: *const f32,
+    /// How many elements `w` and `rest` hold.
+    held: usize,
     lambda: Disjoint<'a, f32>,
     /// Scratch: direction x, y, z, eliminated super-diagonal, right-hand side.
     work: [Disjoint<'a, f32>; 5],
     len: usize,
     stride: usize,
+    pitch: usize,
     /// Compliance (`1/(k h²)`).
     alpha: f32,
+    /// The multipliers start from zero: written, not added to (the last
+    /// element's, of no spring, set to zero). Zeroing the rows' scratch
+    /// beforehand on the calling thread handed every line of it to that
+    /// thread's core, from which the other thread then had to fetch its
+    /// share back (the rows' solve, 9 µs on one thread at N = 128, took
+    /// 19 on the second of two).
+    fresh_lambda: bool,
+}
+
+// SAFETY: the raw arrays are only read, by items that each solve their
+// own chains; `Chains` is otherwise `Disjoint`s and numbers.
+unsafe impl Sync for Chains<'_> {}
+
+impl Chains<'_> {
+    /// Checks what the kernels' unchecked loads and stores rely on: the
+    /// first `width` chains lie within every array.
+    fn assert_holds(&self, width: usize) {
+        assert!(width >= 1 && self.len >= 2);
+        let total = self.extent(width);
+        let arrays = [self.x, self.y, self.z, self.lambda];
+        assert!(arrays.iter().all(|a| a.len() >= total));
+        assert!(self.work.iter().all(|a| a.len() >= total) && self.held >= total);
+    }
+
+    /// The first element of chain `j`.
+    #[inline(always)]
+    fn first(&self, j: usize) -> usize {
+        (j / CHUNK) * self.pitch + j % CHUNK
+    }
+
+    /// One past the last element of the first `width` chains.
+    fn extent(&self, width: usize) -> usize {
+        self.first(width - 1) + (self.len - 1) * self.stride + 1
+    }
 }
 
 impl ChainScratch {
@@ -119,9 +175,10 @@ impl ChainScratch {
             return;
         }
         let n = cols * rows;
+        let padded = scratch_len((cols, rows));
         if self.shape != Some((cols, rows)) {
-            self.rows = Staggered::new(6, n, 7);
-            self.work = Staggered::new(5, n, 13);
+            self.rows = Staggered::new(6, padded, 7);
+            self.work = Staggered::new(10, padded, 13);
             self.column.clear();
             self.column.resize(cols, 0);
             for (c, &lane) in plan.lanes_of(&(0..cols)).iter().enumerate() {
@@ -135,77 +192,112 @@ impl ChainScratch {
         let [lx, ly, lz, _, _, _, lw] = lanes.disjoint();
         let mut t = self.rows.all_mut().map(Disjoint::new);
         let t: [Disjoint<f32>; 6] = std::array::from_fn(|_| t.next().expect("six"));
-        let work = {
+        let (work, column_work) = {
             let mut w = self.work.all_mut().map(Disjoint::new);
-            std::array::from_fn(|_| w.next().expect("five"))
+            let mut five =
+                || -> [Disjoint<f32>; 5] { std::array::from_fn(|_| w.next().expect("ten")) };
+            (five(), five())
         };
-        let team_t = team.for_work(n, PARALLEL_MIN_SPRINGS);
         let shape = (cols, rows);
-        // Rows: into the transposed scratch. Inverse masses and rest
-        // lengths only when the masses or the plan changed.
+        // Rows: each chunk of them copied into the transposed scratch,
+        // solved and copied back by one item, on one thread. Inverse
+        // masses and rest lengths copied only when the masses or the plan
+        // changed.
         let constants = self.constants_for != Some(revision);
         self.constants_for = Some(revision);
-        // SAFETY: the lanes are only read until the rows are solved; each
-        // chunk of lanes along a row writes its own columns' scratch.
-        unsafe {
-            let [x, y, z, w] = [lx, ly, lz, lw].map(|d| &*d.range(0..n));
-            let pairs = [
-                (x, t[TX]),
-                (y, t[TY]),
-                (z, t[TZ]),
-                (w, t[TW]),
-                (rest_rows, t[TREST]),
-            ];
-            transpose_in(
-                &pairs[..if constants { 5 } else { 3 }],
-                column,
-                shape,
-                team_t,
-                simd,
-            );
-        }
-        // SAFETY: the multipliers' scratch is this thread's alone here.
-        unsafe { t[TLAMBDA].range(0..n) }.fill(0.0);
-        // SAFETY: inverse masses and rest lengths are only read from here on.
-        let (tw, trest) = unsafe { (&*t[TW].range(0..n), &*t[TREST].range(0..n)) };
+        let into: [Pair; 5] = [
+            (lx.as_ptr(), t[TX].as_ptr()),
+            (ly.as_ptr(), t[TY].as_ptr()),
+            (lz.as_ptr(), t[TZ].as_ptr()),
+            (lw.as_ptr(), t[TW].as_ptr()),
+            (rest_rows.as_ptr(), t[TREST].as_ptr()),
+        ];
+        let back: [Pair; 4] = [
+            (t[TX].as_ptr(), lx.as_ptr()),
+            (t[TY].as_ptr(), ly.as_ptr()),
+            (t[TZ].as_ptr(), lz.as_ptr()),
+            (t[TLAMBDA].as_ptr(), lambda_rows.as_mut_ptr()),
+        ];
+        let copies = RowCopies {
+            into: &into[..if constants { 5 } else { 3 }],
+            back,
+        };
+        let (lanes_len, scratch) = (
+            lx.len().min(ly.len()).min(lz.len()).min(lw.len()),
+            t[TX].len(),
+        );
+        let held = t.iter().map(|a| a.len()).min().unwrap_or(0);
+        assert_within(
+            &[(lanes_len.min(rest_rows.len()), held)],
+            column,
+            shape,
+            Way::In,
+        );
+        assert_within(
+            &[(held, lanes_len.min(lambda_rows.len()))],
+            column,
+            shape,
+            Way::Out,
+        );
+        debug_assert!(scratch >= padded);
         let chains = Chains {
             x: t[TX],
             y: t[TY],
             z: t[TZ],
-            w: tw,
-            rest: trest,
+            w: t[TW].as_ptr(),
+            rest: t[TREST].as_ptr(),
+            held,
             lambda: t[TLAMBDA],
             work,
             len: cols,
-            stride: rows,
+            stride: CHUNK,
+            pitch: CHUNK * cols,
             alpha,
+            fresh_lambda: true,
         };
-        solve_all(chains, rows, team, simd);
-        // Back into the lanes, a chunk of rows a thread.
-        // SAFETY: the scratch is only read now; each chunk of rows writes
-        // its own rows' lanes.
-        unsafe {
-            let lambda_rows = Disjoint::new(lambda_rows);
-            let [x, y, z, lambda] = [TX, TY, TZ, TLAMBDA].map(|a| &*t[a].range(0..n));
-            let pairs = [(x, lx), (y, ly), (z, lz), (lambda, lambda_rows)];
-            transpose_out(&pairs, column, shape, team_t, simd);
-        }
+        chains.assert_holds(rows);
+        // Whole, not by field: the struct is what may be shared.
+        let copies = &copies;
+        team.for_work(n, PARALLEL_MIN_SPRINGS)
+            .sum_count(rows.div_ceil(CHUNK), |q| {
+                let part = q * CHUNK..((q + 1) * CHUNK).min(rows);
+                // SAFETY: the arrays hold the grid (asserted); this item
+                // alone reads and writes these rows of the lanes, of the
+                // rows' multipliers and of the scratch (the chunk's
+                // stretch of it), and solves their chains.
+                unsafe {
+                    copy_rows(copies.into, column, shape, part.clone(), (Way::In, simd));
+                    solve_chains(&chains, part.clone(), simd);
+                    copy_rows(&copies.back, column, shape, part, (Way::Out, simd));
+                }
+                0
+            });
         // Columns: in place, down the rows of the lanes.
-        // SAFETY: inverse masses are only read.
-        let w = unsafe { &*lw.range(0..n) };
         let chains = Chains {
             x: lx,
             y: ly,
             z: lz,
-            w,
-            rest: rest_cols,
+            w: lw.as_ptr(),
+            rest: rest_cols.as_ptr(),
+            held: lw.len().min(rest_cols.len()),
             lambda: Disjoint::new(lambda_cols),
-            work,
+            work: column_work,
             len: rows,
             stride: cols,
+            pitch: CHUNK,
             alpha,
+            fresh_lambda: false,
         };
-        solve_all(chains, cols, team, simd);
+        chains.assert_holds(cols);
+        // Whole, not by field: the struct is what may be shared.
+        let chains = &chains;
+        team.for_work(n, PARALLEL_MIN_SPRINGS)
+            .sum_count(cols.div_ceil(CHUNK), |q| {
+                // SAFETY: the chains lie within the arrays (asserted); each
+                // item solves its own.
+                unsafe { solve_chains(chains, q * CHUNK..((q + 1) * CHUNK).min(cols), simd) };
+                0
+            });
     }
 
     /// Forgets the copied inverse masses and rest lengths (a new plan).
@@ -214,31 +306,31 @@ impl ChainScratch {
     }
 }
 
-/// Solves the `width` chains of `chains`, a chunk at a time.
-fn solve_all(chains: Chains, width: usize, team: Team, simd: bool) {
-    let total = chains.len * chains.stride;
-    let arrays = [chains.x, chains.y, chains.z, chains.lambda];
-    assert!(width <= chains.stride && chains.len >= 2);
-    assert!(
-        arrays.iter().all(|a| a.len() >= total) && chains.work.iter().all(|a| a.len() >= total)
-    );
-    assert!(chains.w.len() >= total && chains.rest.len() >= total);
-    let chunks = width.div_ceil(CHUNK);
-    let team = team.for_work(width * chains.len, PARALLEL_MIN_SPRINGS);
-    team.sum_count(chunks, |q| {
-        let j = q * CHUNK..((q + 1) * CHUNK).min(width);
-        #[cfg(target_arch = "x86_64")]
-        if simd {
-            // SAFETY: `simd` only when the CPU has AVX2; chunks are
-            // disjoint sets of chains, within the arrays (asserted).
-            unsafe { solve_chunk_avx2(&chains, j) };
-            return 0;
-        }
-        let _ = simd;
-        // SAFETY: as above.
-        unsafe { solve_chunk(&chains, j) };
-        0
-    });
+/// A transpose's arrays, shared by the items that copy their own rows.
+struct RowCopies<'a> {
+    into: &'a [Pair],
+    back: [Pair; 4],
+}
+
+// SAFETY: each item copies only its own rows (`ChainScratch::solve_with`).
+unsafe impl Sync for RowCopies<'_> {}
+
+/// Solves the chains `j` of `chains` (within a chunk of [`CHUNK`]), in the
+/// AVX2 kernel when `simd`.
+///
+/// # Safety
+/// The chains passed [`Chains::assert_holds`], and no other thread touches
+/// them meanwhile; `simd` only where the CPU has AVX2.
+unsafe fn solve_chains(chains: &Chains, j: std::ops::Range<usize>, simd: bool) {
+    #[cfg(target_arch = "x86_64")]
+    if simd {
+        // SAFETY: the caller's promise.
+        unsafe { solve_chunk_avx2(chains, j) };
+        return;
+    }
+    let _ = simd;
+    // SAFETY: the caller's promise.
+    unsafe { solve_chunk(chains, j) };
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -311,12 +403,13 @@ unsafe fn store<const M: usize>(p: *mut f32, at: usize, v: [f32; M]) {
 /// As for [`solve_chunk`].
 #[inline(always)]
 unsafe fn solve_group<const M: usize>(c: &Chains, j: usize) {
+    let j = c.first(j);
     let alpha = c.alpha;
     let s = c.stride;
     let m = c.len - 1;
     let [x, y, z, lambda] = [c.x, c.y, c.z, c.lambda].map(|a| a.as_ptr());
     let [nxp, nyp, nzp, cpp, dpp] = c.work.map(|a| a.as_ptr());
-    let (w, rest) = (c.w.as_ptr(), c.rest.as_ptr());
+    let (w, rest) = (c.w, c.rest);
     // SAFETY (every load and store below): element `k · s + j .. + M` for
     // `k < len` is within the arrays and belongs to these chains only.
     unsafe {
@@ -366,7 +459,11 @@ unsafe fn solve_group<const M: usize>(c: &Chains, j: usize) {
             } else {
                 [0.0; M]
             };
-            let mut lam = load::<M>(lambda, ka);
+            let mut lam = if c.fresh_lambda {
+                [0.0; M]
+            } else {
+                load::<M>(lambda, ka)
+            };
             for i in 0..M {
                 let d = dp[i] - cp[i] * next[i];
                 next[i] = d;
@@ -387,6 +484,9 @@ unsafe fn solve_group<const M: usize>(c: &Chains, j: usize) {
         store(x, j, b[0]);
         store(y, j, b[1]);
         store(z, j, b[2]);
+        if c.fresh_lambda {
+            store(lambda, m * s + j, [0.0; M]);
+        }
     }
 }
 
