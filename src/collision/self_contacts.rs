@@ -532,7 +532,7 @@ impl SelfContacts {
         let edge_lists = Disjoint::new(&mut self.border_blocks[..border_blocks]);
         // The triangles' blocks, then the border edges' (serial, they
         // were a tenth of the `fold`'s frame), in one handout.
-        team.sum_count(blocks + border_blocks, |k| {
+        team.sum_count_uneven(blocks + border_blocks, |k| {
             if k >= blocks {
                 let e = k - blocks;
                 // SAFETY: block `e` alone uses edge list `e`.

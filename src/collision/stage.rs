@@ -409,7 +409,7 @@ impl CollisionStage {
         let surface = Disjoint::new(&mut self.surface[..]);
         let contact_set = self.contacts.shared();
         let scratch = Disjoint::new(&mut self.blocks[..]);
-        let contacts = options.team.sum_count(blocks, |b| {
+        let contacts = options.team.sum_count_uneven(blocks, |b| {
             let range = b * BLOCK..((b + 1) * BLOCK).min(n);
             // SAFETY: blocks are disjoint ranges of particles, and block `b`
             // alone uses scratch `b`.
@@ -508,7 +508,7 @@ impl CollisionStage {
         };
         let watch = &self.edge_watch[..];
         let lists = Disjoint::new(&mut self.edge_blocks[..]);
-        team.sum_count(blocks, |k| {
+        team.sum_count_uneven(blocks, |k| {
             // SAFETY: block `k` alone uses list `k`.
             let list = unsafe { &mut lists.range(k..k + 1)[0].0 };
             list.clear();

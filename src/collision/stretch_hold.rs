@@ -188,7 +188,7 @@ impl CollisionStage {
         let (nearest, watch, x) = (&self.nearest, &self.hold_watch, &particles.x);
         let words = self.hold_due.len();
         let due = Disjoint::new(&mut self.hold_due[..]);
-        team.sum_count(words.div_ceil(HOLD_WORDS), |item| {
+        team.sum_count_uneven(words.div_ceil(HOLD_WORDS), |item| {
             let first = item * HOLD_WORDS;
             let last = (first + HOLD_WORDS).min(words);
             // SAFETY: item `item` alone writes these words.
