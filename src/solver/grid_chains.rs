@@ -465,39 +465,7 @@ unsafe fn twisted_group<const M: usize>(c: &Chains, j: usize, (half, pass): (Hal
             (Half::Top, Pass::Eliminate) => {
                 // As `solve_group`'s forward pass, up to the middle spring,
                 // whose pivot and right-hand side are kept undivided.
-                let (mut pn, mut pinv, mut pdp) = ([[0.0f32; M]; 3], [0.0f32; M], [0.0f32; M]);
-                let mut a = particle::<M>(at, j);
-                for k in 0..=h {
-                    let (ka, kb) = (k * s + j, (k + 1) * s + j);
-                    let b = particle::<M>(at, kb);
-                    let r = load::<M>(rest, ka);
-                    let (mut n, mut sup, mut inv, mut dp) =
-                        ([[0.0f32; M]; 3], [0.0f32; M], [0.0f32; M], [0.0f32; M]);
-                    let mut pivot = [0.0f32; M];
-                    for i in 0..M {
-                        let (u, stretch) = direction(&a, &b, r[i], i);
-                        (n[0][i], n[1][i], n[2][i]) = (u[0], u[1], u[2]);
-                        let off = -a[3][i] * (pn[0][i] * u[0] + pn[1][i] * u[1] + pn[2][i] * u[2]);
-                        sup[i] = off * pinv[i];
-                        pivot[i] = a[3][i] + b[3][i] + alpha - off * sup[i];
-                        inv[i] = if pivot[i] > 0.0 { 1.0 / pivot[i] } else { 0.0 };
-                        dp[i] = -stretch - off * pdp[i];
-                        if k < h {
-                            dp[i] *= inv[i];
-                        }
-                    }
-                    if k > 0 {
-                        store(cpp, ka - s, sup);
-                    }
-                    store(nxp, ka, n[0]);
-                    store(nyp, ka, n[1]);
-                    store(nzp, ka, n[2]);
-                    store(dpp, ka, dp);
-                    if k == h {
-                        store(cpp, ka, pivot);
-                    }
-                    (pn, pinv, pdp, a) = (n, inv, dp, b);
-                }
+                eliminate_down::<M>(c, j, h + 1, true);
             }
             (Half::Bottom, Pass::Eliminate) => {
                 // The mirror image, from the last spring up to the one after
@@ -555,16 +523,7 @@ unsafe fn twisted_group<const M: usize>(c: &Chains, j: usize, (half, pass): (Hal
                     let n = [load::<M>(nxp, ka), load(nyp, ka), load(nzp, ka)];
                     let (dp, cp) = (load::<M>(dpp, ka), load::<M>(cpp, ka));
                     let mut lam = load::<M>(lambda, ka);
-                    for i in 0..M {
-                        let d = dp[i] - cp[i] * next[i];
-                        next[i] = d;
-                        lam[i] += d;
-                        let (da, db) = (a[3][i] * d, b[3][i] * d);
-                        for e in 0..3 {
-                            a[e][i] -= n[e][i] * da;
-                            b[e][i] += n[e][i] * db;
-                        }
-                    }
+                    substitute((&dp, &cp), &mut next, &mut lam, &n, (&mut a, &mut b));
                     store(lambda, ka, lam);
                     store_particle(at, ka + s, b);
                     b = a;
@@ -592,22 +551,37 @@ unsafe fn twisted_group<const M: usize>(c: &Chains, j: usize, (half, pass): (Hal
                     let eq = load::<M>(dpp, ka);
                     let g = if k == h + 1 { sub } else { load::<M>(cpp, ka) };
                     let mut lam = load::<M>(lambda, ka);
-                    for i in 0..M {
-                        let d = eq[i] - g[i] * prev[i];
-                        prev[i] = d;
-                        lam[i] += d;
-                        let (da, db) = (a[3][i] * d, b[3][i] * d);
-                        for e in 0..3 {
-                            a[e][i] -= n[e][i] * da;
-                            b[e][i] += n[e][i] * db;
-                        }
-                    }
+                    substitute((&eq, &g), &mut prev, &mut lam, &n, (&mut a, &mut b));
                     store(lambda, ka, lam);
                     store_particle(at, ka, a);
                     a = b;
                 }
                 store_particle(at, m * s + j, a);
             }
+        }
+    }
+}
+
+/// One spring's substitution, in each of `M` lanes: its multiplier's
+/// change `d = rhs − coupling · before` (then the change before the next
+/// spring's), added to `lam`, moving its ends `a` by `−n w_a d` and `b` by
+/// `n w_b d` (positions x, y, z and inverse mass `w`).
+#[inline(always)]
+fn substitute<const M: usize>(
+    (rhs, coupling): (&[f32; M], &[f32; M]),
+    before: &mut [f32; M],
+    lam: &mut [f32; M],
+    n: &[[f32; M]; 3],
+    (a, b): (&mut [[f32; M]; 4], &mut [[f32; M]; 4]),
+) {
+    for i in 0..M {
+        let d = rhs[i] - coupling[i] * before[i];
+        before[i] = d;
+        lam[i] += d;
+        let (da, db) = (a[3][i] * d, b[3][i] * d);
+        for e in 0..3 {
+            a[e][i] -= n[e][i] * da;
+            b[e][i] += n[e][i] * db;
         }
     }
 }
@@ -751,6 +725,68 @@ unsafe fn store<const M: usize>(p: *mut f32, at: usize, v: [f32; M]) {
     unsafe { p.add(at).cast::<[f32; M]>().write(v) }
 }
 
+/// The Thomas algorithm's forward pass on springs `0..end` of the `M`
+/// chains whose first element is `j`, side by side: each spring's
+/// direction, its coupling to the one before (the particle they share:
+/// `−w (n_{k−1} · n_k)`, none before the first) eliminated, the
+/// eliminated super-diagonal stored at the spring before and the
+/// right-hand side divided by the pivot at the spring itself. With
+/// `middle`, the last spring's pivot and right-hand side are stored
+/// undivided instead (the twisted solve's middle spring, [`middle`]).
+/// Returns the particles at the last spring's far end, as loaded.
+///
+/// # Safety
+/// As for [`solve_group`], `j` being the chains' first element.
+#[inline(always)]
+unsafe fn eliminate_down<const M: usize>(
+    c: &Chains,
+    j: usize,
+    end: usize,
+    middle: bool,
+) -> [[f32; M]; 4] {
+    let (alpha, s) = (c.alpha, c.stride);
+    let at = [c.x.as_ptr(), c.y.as_ptr(), c.z.as_ptr(), c.w as *mut f32];
+    let [nxp, nyp, nzp, cpp, dpp] = c.work.map(|a| a.as_ptr());
+    // SAFETY (every load and store below): the caller's promise.
+    unsafe {
+        let (mut pn, mut pinv, mut pdp) = ([[0.0f32; M]; 3], [0.0f32; M], [0.0f32; M]);
+        let mut a = particle::<M>(at, j);
+        for k in 0..end {
+            let (ka, kb) = (k * s + j, (k + 1) * s + j);
+            let b = particle::<M>(at, kb);
+            let r = load::<M>(c.rest, ka);
+            let kept = middle && k + 1 == end;
+            let (mut n, mut sup, mut inv, mut dp) =
+                ([[0.0f32; M]; 3], [0.0f32; M], [0.0f32; M], [0.0f32; M]);
+            let mut pivot = [0.0f32; M];
+            for i in 0..M {
+                let (u, stretch) = direction(&a, &b, r[i], i);
+                (n[0][i], n[1][i], n[2][i]) = (u[0], u[1], u[2]);
+                let off = -a[3][i] * (pn[0][i] * u[0] + pn[1][i] * u[1] + pn[2][i] * u[2]);
+                sup[i] = off * pinv[i];
+                pivot[i] = a[3][i] + b[3][i] + alpha - off * sup[i];
+                inv[i] = if pivot[i] > 0.0 { 1.0 / pivot[i] } else { 0.0 };
+                dp[i] = -stretch - off * pdp[i];
+                if !kept {
+                    dp[i] *= inv[i];
+                }
+            }
+            if k > 0 {
+                store(cpp, ka - s, sup);
+            }
+            store(nxp, ka, n[0]);
+            store(nyp, ka, n[1]);
+            store(nzp, ka, n[2]);
+            store(dpp, ka, dp);
+            if kept {
+                store(cpp, ka, pivot);
+            }
+            (pn, pinv, pdp, a) = (n, inv, dp, b);
+        }
+        a
+    }
+}
+
 /// The Thomas algorithm on the `M` chains from `j`, side by side: the
 /// forward pass eliminates each spring's coupling to the one before (the
 /// particle they share: `−w (n_{k−1} · n_k)`), the backward pass finds the
@@ -763,51 +799,20 @@ unsafe fn store<const M: usize>(p: *mut f32, at: usize, v: [f32; M]) {
 #[inline(always)]
 unsafe fn solve_group<const M: usize>(c: &Chains, j: usize) {
     let j = c.first(j);
-    let alpha = c.alpha;
     let s = c.stride;
     let m = c.len - 1;
     let [x, y, z, lambda] = [c.x, c.y, c.z, c.lambda].map(|a| a.as_ptr());
     let [nxp, nyp, nzp, cpp, dpp] = c.work.map(|a| a.as_ptr());
-    let (w, rest) = (c.w, c.rest);
+    let w = c.w;
     // SAFETY (every load and store below): element `k · s + j .. + M` for
     // `k < len` is within the arrays and belongs to these chains only.
     unsafe {
-        // Forward. The spring before the first is taken as none: its
-        // direction 0 couples nothing.
-        let (mut pn, mut pinv, mut pdp) = ([[0.0f32; M]; 3], [0.0f32; M], [0.0f32; M]);
-        let mut a = [load::<M>(x, j), load(y, j), load(z, j), load(w, j)];
-        for k in 0..m {
-            let (ka, kb) = (k * s + j, (k + 1) * s + j);
-            let b = [load::<M>(x, kb), load(y, kb), load(z, kb), load(w, kb)];
-            let r = load::<M>(rest, ka);
-            let (mut n, mut sup, mut inv, mut dp) =
-                ([[0.0f32; M]; 3], [0.0f32; M], [0.0f32; M], [0.0f32; M]);
-            for i in 0..M {
-                let (dx, dy, dz) = (b[0][i] - a[0][i], b[1][i] - a[1][i], b[2][i] - a[2][i]);
-                let l = (dx * dx + dy * dy + dz * dz).sqrt();
-                let inv_l = if l > 0.0 { 1.0 / l } else { 0.0 };
-                let (ux, uy, uz) = (dx * inv_l, dy * inv_l, dz * inv_l);
-                (n[0][i], n[1][i], n[2][i]) = (ux, uy, uz);
-                let stretch = if r[i] > 0.0 { l - r[i] } else { 0.0 };
-                let off = -a[3][i] * (pn[0][i] * ux + pn[1][i] * uy + pn[2][i] * uz);
-                sup[i] = off * pinv[i];
-                let pivot = a[3][i] + b[3][i] + alpha - off * sup[i];
-                inv[i] = if pivot > 0.0 { 1.0 / pivot } else { 0.0 };
-                dp[i] = (-stretch - off * pdp[i]) * inv[i];
-            }
-            if k > 0 {
-                store(cpp, ka - s, sup);
-            }
-            store(nxp, ka, n[0]);
-            store(nyp, ka, n[1]);
-            store(nzp, ka, n[2]);
-            store(dpp, ka, dp);
-            (pn, pinv, pdp, a) = (n, inv, dp, b);
-        }
+        // Forward, every spring.
+        let last = eliminate_down::<M>(c, j, m, false);
         // Backward, from the last spring (nothing after it), each row's
         // positions kept in registers between the two springs that move it.
         let mut next = [0.0f32; M];
-        let mut b = a; // the last row, as the forward pass left it
+        let mut b = last; // the last row, as the forward pass left it
         for k in (0..m).rev() {
             let ka = k * s + j;
             let mut a = [load::<M>(x, ka), load(y, ka), load(z, ka), load(w, ka)];
@@ -823,16 +828,7 @@ unsafe fn solve_group<const M: usize>(c: &Chains, j: usize) {
             } else {
                 load::<M>(lambda, ka)
             };
-            for i in 0..M {
-                let d = dp[i] - cp[i] * next[i];
-                next[i] = d;
-                lam[i] += d;
-                let (da, db) = (a[3][i] * d, b[3][i] * d);
-                for e in 0..3 {
-                    a[e][i] -= n[e][i] * da;
-                    b[e][i] += n[e][i] * db;
-                }
-            }
+            substitute((&dp, &cp), &mut next, &mut lam, &n, (&mut a, &mut b));
             store(lambda, ka, lam);
             let kb = ka + s;
             store(x, kb, b[0]);
