@@ -495,8 +495,11 @@ fn shares_well(cloth: &Cloth, integrator: Integrator) -> bool {
 /// 80 1.47 / 1.89, 96 2.29 / 2.47, 112 3.51 / 3.12, 128 4.97 / 3.99; the
 /// `box` at N = 64 4.32 / 4.66. (Self-collision's looks gain from a
 /// second thread at any size: `fold` 48 × 48 9.0 / 7.4, `stack` 31.3 /
-/// 25.9.)
-const XPBD_TEAM_MIN_PARTICLES: usize = 10_000;
+/// 25.9.) With the chain solves' memory laid out by thread and items
+/// kept on their owners (thirty-first session; one thread, then two from
+/// 2048 particles): N = 64 0.88 / 0.90–1.11, 80 1.46 / 1.41–1.42, 96
+/// 2.13 / 1.75–1.98: from 8192 (N = 91 up), was 10 000.
+const XPBD_TEAM_MIN_PARTICLES: usize = 8192;
 
 /// Puts the cloth back as it was at the start of the step.
 fn restore(cloth: &mut Cloth, ws: &super::workspace::Workspace) {
