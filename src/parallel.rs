@@ -326,10 +326,10 @@ mod team {
             // on two threads, 3.3 ms a frame so, 3.5 waiting for the
             // caller's two. Four against three (the limit's seven
             // boundaries) wait: 2.98 against 3.05 ms at N = 128.
-            let members = self.cursors.len();
-            let shares =
-                (0..members).map(|m| self.share_start(m + 1, count) - self.share_start(m, count));
-            let (least, most) = shares.fold((u64::MAX, 0), |(l, m), s| (l.min(s), m.max(s)));
+            // (Rounded up, the shares are the count over the members,
+            // rounded down or up.)
+            let members = self.cursors.len() as u64;
+            let (least, most) = (count / members, count.div_ceil(members));
             let near = 3 * least >= 2 * most;
             self.patient
                 .store(taking == Taking::Stalled && near, Ordering::Relaxed);
@@ -356,7 +356,8 @@ mod team {
 
         /// Member `me` claims and runs items of loop `number` of `count`
         /// items: its own share first, then what is left of the others'
-        /// whose owners have stalled ([`STALL`]).
+        /// (in a patient loop, of those whose owners have stalled:
+        /// [`STALL`]).
         fn work(&self, me: usize, number: u64, count: u64) {
             let members = self.cursors.len();
             // Published with the loop (stored before its ticket).

@@ -229,10 +229,7 @@ impl ChainScratch {
             into: &into[..if constants { 5 } else { 3 }],
             back,
         };
-        let (lanes_len, scratch) = (
-            lx.len().min(ly.len()).min(lz.len()).min(lw.len()),
-            t[TX].len(),
-        );
+        let lanes_len = lx.len().min(ly.len()).min(lz.len()).min(lw.len());
         let held = t.iter().map(|a| a.len()).min().unwrap_or(0);
         assert_within(
             &[(lanes_len.min(rest_rows.len()), held)],
@@ -246,7 +243,6 @@ impl ChainScratch {
             shape,
             Way::Out,
         );
-        debug_assert!(scratch >= padded);
         let chains = Chains {
             x: t[TX],
             y: t[TY],
