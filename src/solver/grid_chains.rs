@@ -140,6 +140,18 @@ impl Chains<'_> {
         assert!(self.work.iter().all(|a| a.len() >= total) && self.held >= total);
     }
 
+    /// The positions x, y, z and the inverse masses, as [`particle`]
+    /// reads them (the masses only read).
+    #[inline(always)]
+    fn particles(&self) -> [*mut f32; 4] {
+        [
+            self.x.as_ptr(),
+            self.y.as_ptr(),
+            self.z.as_ptr(),
+            self.w as *mut f32,
+        ]
+    }
+
     /// The first element of chain `j`.
     #[inline(always)]
     fn first(&self, j: usize) -> usize {
@@ -448,11 +460,11 @@ unsafe fn twisted_group<const M: usize>(c: &Chains, j: usize, (half, pass): (Hal
     let s = c.stride;
     let m = c.len - 1;
     let h = m / 2;
-    let [x, y, z, lambda] = [c.x, c.y, c.z, c.lambda].map(|a| a.as_ptr());
+    let lambda = c.lambda.as_ptr();
     let [nxp, nyp, nzp, cpp, dpp] = c.work.map(|a| a.as_ptr());
-    let (w, rest) = (c.w, c.rest);
+    let rest = c.rest;
     // Not closures: a closure would not be compiled for AVX2.
-    let at = [x, y, z, w as *mut f32];
+    let at = c.particles();
     // SAFETY (every load and store below): element `k · s + j .. + M` for
     // `k < len` is within the arrays and belongs to these chains only; of
     // them, this half and pass write only what the docs say.
@@ -741,7 +753,7 @@ unsafe fn eliminate_down<const M: usize>(
     middle: bool,
 ) -> [[f32; M]; 4] {
     let (alpha, s) = (c.alpha, c.stride);
-    let at = [c.x.as_ptr(), c.y.as_ptr(), c.z.as_ptr(), c.w as *mut f32];
+    let at = c.particles();
     let [nxp, nyp, nzp, cpp, dpp] = c.work.map(|a| a.as_ptr());
     // SAFETY (every load and store below): the caller's promise.
     unsafe {
@@ -797,9 +809,8 @@ unsafe fn solve_group<const M: usize>(c: &Chains, j: usize) {
     let j = c.first(j);
     let s = c.stride;
     let m = c.len - 1;
-    let [x, y, z, lambda] = [c.x, c.y, c.z, c.lambda].map(|a| a.as_ptr());
+    let (at, lambda) = (c.particles(), c.lambda.as_ptr());
     let [nxp, nyp, nzp, cpp, dpp] = c.work.map(|a| a.as_ptr());
-    let w = c.w;
     // SAFETY (every load and store below): element `k · s + j .. + M` for
     // `k < len` is within the arrays and belongs to these chains only.
     unsafe {
@@ -811,7 +822,7 @@ unsafe fn solve_group<const M: usize>(c: &Chains, j: usize) {
         let mut b = last; // the last row, as the forward pass left it
         for k in (0..m).rev() {
             let ka = k * s + j;
-            let mut a = [load::<M>(x, ka), load(y, ka), load(z, ka), load(w, ka)];
+            let mut a = particle::<M>(at, ka);
             let n = [load::<M>(nxp, ka), load(nyp, ka), load(nzp, ka)];
             let dp = load::<M>(dpp, ka);
             let cp = if k + 1 < m {
@@ -826,15 +837,10 @@ unsafe fn solve_group<const M: usize>(c: &Chains, j: usize) {
             };
             substitute((&dp, &cp), &mut next, &mut lam, &n, (&mut a, &mut b));
             store(lambda, ka, lam);
-            let kb = ka + s;
-            store(x, kb, b[0]);
-            store(y, kb, b[1]);
-            store(z, kb, b[2]);
+            store_particle(at, ka + s, b);
             b = a;
         }
-        store(x, j, b[0]);
-        store(y, j, b[1]);
-        store(z, j, b[2]);
+        store_particle(at, j, b);
         if c.fresh_lambda {
             store(lambda, m * s + j, [0.0; M]);
         }
