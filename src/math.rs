@@ -13,3 +13,22 @@ pub(crate) fn simd_available() -> bool {
     #[cfg(not(target_arch = "x86_64"))]
     false
 }
+
+/// Aligns the stack frame of the function it is inlined into to a cache
+/// line: the first statement of each AVX2 kernel that keeps vectors on
+/// its stack. Rust keeps the stack 16-byte aligned, and the 32-byte
+/// vectors a kernel spills were then split across cache lines or not by
+/// how deep its caller's frames happened to be, one build to another: a
+/// load after a split spill waited (the drape at N = 128 on two threads,
+/// 3.29–3.33 ms a frame in one build of the same source, 3.00–3.09 in
+/// another; the sweep's kernel with its frame aligned, 3.00–3.08 in the
+/// slow one). A local that needs the alignment makes the compiler align
+/// the frame, and its spills with it.
+#[inline(always)]
+pub(crate) fn align_frame() {
+    #[repr(align(64))]
+    struct Line(#[allow(dead_code)] [u8; 64]);
+    // A local, not `&Line(..)`, which would be promoted to a static.
+    let line = Line([0; 64]);
+    std::hint::black_box(&line);
+}

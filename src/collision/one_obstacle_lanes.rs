@@ -265,6 +265,7 @@ fn solve(batch: &mut Batch, shared: &Shared, simd: bool) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn solve_avx2(batch: &mut Batch, shared: &Shared) {
+    crate::math::align_frame();
     solve_lanes(batch, shared);
 }
 

@@ -87,6 +87,7 @@ fn solve(batch: &mut Batch, air: &AirField, t: f32, simd: bool) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn solve_avx2(batch: &mut Batch, air: &AirField, t: f32) {
+    crate::math::align_frame();
     solve_lanes(batch, air, t);
 }
 

@@ -176,6 +176,7 @@ impl Job<'_> {
         lambda: &mut [f32],
         k: Compliance,
     ) -> usize {
+        crate::math::align_frame();
         const W: usize = 8;
         // Every end checked once here, so that the loads and stores below
         // need no check each (their checks and branches were a third of

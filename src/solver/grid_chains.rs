@@ -405,6 +405,7 @@ fn solve_all_twisted(chains: Chains, width: usize, team: Team, simd: bool) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn twisted_chunk_avx2(chains: &Chains, j: std::ops::Range<usize>, step: (Half, Pass)) {
+    crate::math::align_frame();
     // SAFETY: the caller's promise.
     unsafe { twisted_chunk(chains, j, step) };
 }
@@ -677,6 +678,7 @@ unsafe fn middle<const M: usize>(c: &Chains, j: usize) -> ([f32; M], [f32; M]) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn solve_chunk_avx2(chains: &Chains, j: std::ops::Range<usize>) {
+    crate::math::align_frame();
     // SAFETY: the caller's promise.
     unsafe { solve_chunk(chains, j) };
 }

@@ -734,6 +734,7 @@ unsafe fn sweep_region_avx2<const ZERO: bool, const KEPT: bool>(
     view: &mut View,
     lambda: &mut [f32],
 ) {
+    crate::math::align_frame();
     sweep_region::<ZERO, KEPT>(job, view, lambda);
 }
 
@@ -1063,6 +1064,7 @@ unsafe fn limit_runs_avx2<const PLANES: bool>(
     factor: f32,
     marks: &mut LimitMarks,
 ) -> Tally {
+    crate::math::align_frame();
     limit_runs::<PLANES>(runs, rest, lanes, factor, marks)
 }
 

@@ -575,6 +575,7 @@ fn run(chunk: Chunk, law: &Law, simd: bool) -> f32 {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn run_avx2(mut chunk: Chunk, law: &Law) -> f32 {
+    crate::math::align_frame();
     use std::arch::x86_64::*;
     let n = chunk.len();
     let whole = n - n % W;
@@ -838,6 +839,7 @@ unsafe fn planes_avx2(
     start: [&[f32]; 3],
     out: &mut [&mut [f32]; 4],
 ) -> usize {
+    crate::math::align_frame();
     use std::arch::x86_64::*;
     let n = start[0].len();
     assert!(start.iter().all(|s| s.len() == n) && out.iter().all(|o| o.len() == n));

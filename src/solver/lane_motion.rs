@@ -46,6 +46,7 @@ pub(super) fn correct_and_predict(band: BandState, motion: Motion) -> f32 {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn correct_and_predict_avx2(band: BandState, motion: Motion) -> f32 {
+    crate::math::align_frame();
     correct_and_predict_eights(band, motion)
 }
 
