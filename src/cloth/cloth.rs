@@ -424,7 +424,16 @@ impl Cloth {
     /// of [`Self::max_strain`] `< strain` without a root or a division a
     /// spring: the solver's divergence check runs it once a step.
     pub fn strain_below(&self, kind: SpringKind, strain: f32) -> bool {
-        let (a, b, rest) = self.springs_of(kind);
+        self.strain_below_among(self.topology.springs.range(kind), strain)
+    }
+
+    /// [`Self::strain_below`] for the springs `range` (indices into the
+    /// cloth's springs), which a divergence check shares among threads.
+    pub(crate) fn strain_below_among(&self, range: std::ops::Range<usize>, strain: f32) -> bool {
+        let springs = &self.topology.springs;
+        let (a, b) = springs.endpoints();
+        let rest = &springs.rest_lengths()[range.clone()];
+        let (a, b) = (&a[range.clone()], &b[range]);
         let x = &self.particles.x;
         let factor = 1.0 + strain;
         // One `and` over all (no early exit: the loop stays branch-free).

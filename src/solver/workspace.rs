@@ -42,6 +42,9 @@ pub(crate) struct Workspace {
     pub tearing: Tearing,
     /// The tethers of the cloth last stepped (rebuilt when its pins change).
     pub tethers: Tethers,
+    /// The longest stretch or shear rest length (m) of the cloth last
+    /// stepped, and its mass revision then.
+    pub longest_rest: Option<(u64, f32)>,
 }
 
 impl Workspace {
