@@ -266,27 +266,42 @@ impl CollisionStage {
 /// Whether some stretch spring of `springs` at positions `x` is over
 /// `factor` times its rest length by more than the slack: what this hold
 /// would shorten, over every stretch spring rather than those near an
-/// obstacle (so false means it would shorten none). One pass, no early
-/// exit (the loop stays branch-free).
-pub(crate) fn any_stretch_over_limit(springs: &Springs, x: &[Vector], factor: f32) -> bool {
+/// obstacle (so false means it would shorten none). Blocks of springs on
+/// the `team`, each one pass with no early exit (the loop stays
+/// branch-free).
+pub(crate) fn any_stretch_over_limit(
+    springs: &Springs,
+    x: &[Vector],
+    factor: f32,
+    team: Team,
+) -> bool {
     if !factor.is_finite() {
         return false;
     }
     let stretch = springs.range(SpringKind::Stretch);
-    let (a, b, rest) = (
-        &springs.a[stretch.clone()],
-        &springs.b[stretch.clone()],
-        &springs.rest[stretch],
-    );
-    let mut over = false;
-    for ((&a, &b), &rest) in a.iter().zip(b).zip(rest) {
-        let len2 = (x[b as usize] - x[a as usize]).length_squared();
-        // A length that is not a number counts as over: the hold's own
-        // test skips it, but nothing is then known of it.
-        over |= over_limit(len2, rest * factor) || len2.is_nan();
-    }
-    over
+    let blocks = stretch.len().div_ceil(OVER_BLOCK);
+    let over = team.sum_count(blocks, |k| {
+        let block =
+            stretch.start + k * OVER_BLOCK..(stretch.start + (k + 1) * OVER_BLOCK).min(stretch.end);
+        let (a, b, rest) = (
+            &springs.a[block.clone()],
+            &springs.b[block.clone()],
+            &springs.rest[block],
+        );
+        let mut over = false;
+        for ((&a, &b), &rest) in a.iter().zip(b).zip(rest) {
+            let len2 = (x[b as usize] - x[a as usize]).length_squared();
+            // A length that is not a number counts as over: the hold's own
+            // test skips it, but nothing is then known of it.
+            over |= over_limit(len2, rest * factor) || len2.is_nan();
+        }
+        u32::from(over)
+    });
+    over > 0
 }
+
+/// Stretch springs a block of [`any_stretch_over_limit`] takes.
+const OVER_BLOCK: usize = 8192;
 
 /// Whether a spring of squared length `len2` (m²) is over its `limit` (m)
 /// by more than the slack every limit allows (false for a length that is
@@ -330,7 +345,7 @@ mod tests {
         let springs = cloth.springs();
         let mut x = cloth.positions().to_vec();
         let factor = 1.05;
-        assert!(!any_stretch_over_limit(springs, &x, factor));
+        assert!(!any_stretch_over_limit(springs, &x, factor, Team::ALONE));
         // The first stretch spring, stretched along itself.
         let s = springs.range(SpringKind::Stretch).start;
         let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
@@ -339,12 +354,44 @@ mod tests {
         let xa = x[a];
         let at = |stretch: f32| xa + along * (rest * stretch);
         x[b] = at(factor * (1.0 + 0.5 * LIMIT_SLACK));
-        assert!(!any_stretch_over_limit(springs, &x, factor));
+        assert!(!any_stretch_over_limit(springs, &x, factor, Team::ALONE));
         x[b] = at(factor * (1.0 + 2.0 * LIMIT_SLACK));
-        assert!(any_stretch_over_limit(springs, &x, factor));
+        assert!(any_stretch_over_limit(springs, &x, factor, Team::ALONE));
         // No limit: nothing to hold.
-        assert!(!any_stretch_over_limit(springs, &x, f32::INFINITY));
+        assert!(!any_stretch_over_limit(
+            springs,
+            &x,
+            f32::INFINITY,
+            Team::ALONE
+        ));
         x[b] = Vector::splat(f32::NAN);
-        assert!(any_stretch_over_limit(springs, &x, factor));
+        assert!(any_stretch_over_limit(springs, &x, factor, Team::ALONE));
+    }
+
+    /// The check's blocks of springs cover them all: the last stretch
+    /// spring of a cloth with two blocks' worth is found over, on one
+    /// thread and on a team.
+    #[test]
+    fn the_check_looks_at_every_block_of_springs() {
+        let cloth = ClothBuilder::new(70, 70).build().unwrap();
+        let springs = cloth.springs();
+        let stretch = springs.range(SpringKind::Stretch);
+        assert!(stretch.len() > OVER_BLOCK);
+        let mut x = cloth.positions().to_vec();
+        let s = stretch.end - 1;
+        let (a, b) = (springs.a[s] as usize, springs.b[s] as usize);
+        let check = |x: &[Vector], team: Team| any_stretch_over_limit(springs, x, 1.05, team);
+        let at_rest = x.clone();
+        x[b] = x[a] + (x[b] - x[a]) * 1.2;
+        let answers = |team: Team| [check(&at_rest, team), check(&x, team)];
+        assert_eq!(answers(Team::ALONE), [false, true]);
+        #[cfg(feature = "parallel")]
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap()
+            .install(|| {
+                crate::parallel::with_team(true, |team| assert_eq!(answers(team), [false, true]))
+            });
     }
 }

@@ -438,7 +438,8 @@ impl ClothSolver {
                         2.0 * limit * longest_rest,
                         cloth.params.thickness,
                     ))
-                && (room.is_some() || !any_stretch_over_limit(springs, &cloth.particles.x, limit));
+                && (room.is_some()
+                    || !any_stretch_over_limit(springs, &cloth.particles.x, limit, team));
             if settled {
                 report.contacts += outcome.touching;
                 continue;
