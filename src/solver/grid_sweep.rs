@@ -12,9 +12,11 @@
 //! them (the springs that cross from one band into the next), likewise.
 //! Bands share no particle, nor do boundaries, so each of the two phases
 //! may run its regions on any threads in any order: the bits are those of
-//! one thread. Two handouts to the threads a sweep, not one per family and
-//! phase (twelve): at N = 64 the handshakes had cost more than the second
-//! thread saved. The boundary springs then lag their band's families by a
+//! one thread. One handout to the threads a sweep, not one per family and
+//! phase (twelve: at N = 64 the handshakes had cost more than the second
+//! thread saved): a band's item runs the boundaries beside it once their
+//! other band is done too ([`bands_and_boundaries`]), and a boundary
+//! touches only its two bands. The boundary springs then lag their band's families by a
 //! sweep: before the stretch limit this order landed the drape at N = 128
 //! 0.3% more stretched; with it, the peak over every frame went 4.61 →
 //! 4.65% (N = 64: 4.50 → 4.56%).
@@ -22,7 +24,7 @@
 use crate::cloth::{Grid, SpringKind, Springs};
 use crate::math::simd_available;
 use crate::parallel::{Disjoint, Team};
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
 use super::staggered::Staggered;
 use crate::collision::LIMIT_SLACK;
@@ -127,6 +129,9 @@ pub(crate) struct GridPlan {
     phases: [Vec<Region>; 2],
     /// Per phase and pass: its springs (a phase with few runs on one thread).
     work: [[usize; 6]; 2],
+    /// Which bands and boundaries a handout of both phases has run
+    /// ([`bands_and_boundaries`]).
+    flags: PhaseFlags,
     /// Per pass: the multiplier over the substep's sweeps (N·s²) of the
     /// spring leaving each lane.
     lambda: Staggered,
@@ -362,6 +367,7 @@ impl GridPlan {
             shape: (cols, rows),
             lane,
             passes,
+            flags: PhaseFlags::new(phases[0].len()),
             phases,
             work,
             lambda: Staggered::new(6, n, LAMBDA_SLOT),
@@ -660,41 +666,114 @@ fn sweep_with(
     let kind_of: [usize; 6] = std::array::from_fn(|p| plan.passes[p].kind.index());
     let k: [Compliance; 6] = std::array::from_fn(|p| compliance[plan.passes[p].kind.index()]);
     let rest: [&[f32]; 6] = std::array::from_fn(|p| plan.rest.get(p));
-    for (phase, work) in plan.phases.iter().zip(&plan.work) {
-        let springs = work.iter().sum();
-        team.for_work(springs, PARALLEL_MIN_SPRINGS)
-            .sum_over(phase, |region| {
-                // SAFETY: the regions of a phase touch disjoint lanes (the plan
-                // is built so, and tested), so the views alive at once are
-                // disjoint; `lanes` and the passes are borrowed for the sweep.
-                let (mut view, lambda): (_, [&mut [f32]; 6]) = unsafe {
-                    (
-                        shared.view(region.lanes.clone()),
-                        std::array::from_fn(|p| shared.lambda(p, region.lanes.clone())),
-                    )
-                };
-                for (p, lambda) in lambda.into_iter().enumerate() {
-                    let kind = kinds[kind_of[p]];
-                    if !kind.on {
-                        continue;
-                    }
-                    let job = RegionSweep {
-                        region,
-                        p,
-                        rest: &rest,
-                        k: &k,
-                    };
-                    let (view, simd) = (&mut view, simd);
-                    match (kind.from_zero, kind.kept) {
-                        (false, true) => sweep_region_on::<false, true>(&job, view, lambda, simd),
-                        (true, true) => sweep_region_on::<true, true>(&job, view, lambda, simd),
-                        (false, false) => sweep_region_on::<false, false>(&job, view, lambda, simd),
-                        (true, false) => sweep_region_on::<true, false>(&job, view, lambda, simd),
-                    }
-                }
-                0
-            });
+    let call = plan.flags.begin();
+    let springs = plan.work.iter().flatten().sum();
+    let team = team.for_work(springs, PARALLEL_MIN_SPRINGS);
+    bands_and_boundaries((&plan.phases, &plan.flags, call), team, |region| {
+        // SAFETY: the regions run at once touch disjoint lanes (the
+        // regions of a phase do, the plan is built so and tested, and
+        // a boundary runs only once its two bands are done), so the
+        // views alive at once are disjoint; `lanes` and the passes
+        // are borrowed for the sweep.
+        let (mut view, lambda): (_, [&mut [f32]; 6]) = unsafe {
+            (
+                shared.view(region.lanes.clone()),
+                std::array::from_fn(|p| shared.lambda(p, region.lanes.clone())),
+            )
+        };
+        for (p, lambda) in lambda.into_iter().enumerate() {
+            let kind = kinds[kind_of[p]];
+            if !kind.on {
+                continue;
+            }
+            let job = RegionSweep {
+                region,
+                p,
+                rest: &rest,
+                k: &k,
+            };
+            let (view, simd) = (&mut view, simd);
+            match (kind.from_zero, kind.kept) {
+                (false, true) => sweep_region_on::<false, true>(&job, view, lambda, simd),
+                (true, true) => sweep_region_on::<true, true>(&job, view, lambda, simd),
+                (false, false) => sweep_region_on::<false, false>(&job, view, lambda, simd),
+                (true, false) => sweep_region_on::<true, false>(&job, view, lambda, simd),
+            }
+        }
+        0
+    });
+}
+
+/// Which bands and boundaries a handout of both phases has run: per band
+/// and per boundary, the number of the last call that ran it (a call
+/// numbers itself from [`PhaseFlags::begin`]; none is ever reset).
+#[derive(Debug, Default)]
+struct PhaseFlags {
+    call: AtomicU64,
+    done: Vec<AtomicU64>,
+    claimed: Vec<AtomicU64>,
+}
+
+impl Clone for PhaseFlags {
+    /// Flags for as many bands, none run.
+    fn clone(&self) -> PhaseFlags {
+        PhaseFlags::new(self.done.len())
     }
+}
+
+impl PhaseFlags {
+    /// Flags for `bands` bands and the boundaries between them.
+    fn new(bands: usize) -> PhaseFlags {
+        let none = |k: usize| (0..k).map(|_| AtomicU64::new(0)).collect();
+        PhaseFlags {
+            call: AtomicU64::new(0),
+            done: none(bands),
+            claimed: none(bands.saturating_sub(1)),
+        }
+    }
+
+    /// The number of a new call (by the calling thread, before its handout).
+    fn begin(&self) -> u64 {
+        self.call.fetch_add(1, Ordering::Relaxed) + 1
+    }
+
+    /// After band `i` of call `call`: the boundaries beside it whose other
+    /// band is done too and that no one has claimed yet, now claimed.
+    /// Sequentially consistent: of two bands done at once, at least one
+    /// sees the other done (and only one claims their boundary).
+    fn ready_after(&self, i: usize, call: u64) -> impl Iterator<Item = usize> + '_ {
+        self.done[i].store(call, Ordering::SeqCst);
+        let done = move |b: usize| self.done[b].load(Ordering::SeqCst) == call;
+        [i.wrapping_sub(1), i].into_iter().filter(move |&j| {
+            j < self.claimed.len()
+                && done(j)
+                && done(j + 1)
+                && self.claimed[j].swap(call, Ordering::SeqCst) != call
+        })
+    }
+}
+
+/// Runs `region` on every band of rows and every boundary between two (the
+/// two `phases`) in one handout of the bands, numbered `call` in `flags`:
+/// a band's item, once done, runs each boundary beside it whose other band
+/// is done too. A boundary then runs after both its bands, and touches no
+/// other: the bits of the phases one after the other, in half the
+/// handouts (the stretch limit's passes took eight a substep, the sweep
+/// two). Returns the sum of what `region` returns.
+fn bands_and_boundaries(
+    (phases, flags, call): (&[Vec<Region>; 2], &PhaseFlags, u64),
+    team: Team,
+    region: impl Fn(&Region) -> u32 + Sync,
+) -> u32 {
+    let [bands, boundaries] = phases;
+    debug_assert_eq!(boundaries.len() + 1, bands.len().max(1));
+    team.sum_count(bands.len(), |i| {
+        let mut sum = region(&bands[i]);
+        for j in flags.ready_after(i, call) {
+            sum += region(&boundaries[j]);
+        }
+        sum
+    })
 }
 
 /// One family's runs in one region: the family, and per family the rest
@@ -930,8 +1009,7 @@ fn limit_stretch_with(
             SpringKind::Bend
         }
     }));
-    let phases = &plan.phases;
-    let work = &plan.work;
+    let (phases, work, flags) = (&plan.phases, &plan.work, &plan.flags);
     // One pass: the springs it shortened, and the least room of those it
     // looked at (limit² - length², m², as bits: never negative, and
     // non-negative floats order as their bits do, so the regions' minimum
@@ -940,54 +1018,53 @@ fn limit_stretch_with(
     let pass = |number: u32| -> Tally {
         let room = AtomicU32::new(f32::INFINITY.to_bits());
         let far = AtomicU32::new(0);
-        let mut over = 0;
-        for (phase, work) in phases.iter().zip(work) {
-            // The first pass: the stretch springs alone. The pairs of those
-            // it finds within their limits are within theirs too.
-            let limits = if number == 1 {
-                &limits[2..]
-            } else {
-                &limits[..]
+        // The first pass: the stretch springs alone. The pairs of those
+        // it finds within their limits are within theirs too.
+        let limits = if number == 1 {
+            &limits[2..]
+        } else {
+            &limits[..]
+        };
+        let springs = work
+            .iter()
+            .flat_map(|work| limits.iter().map(|&(p, _)| work[p]))
+            .sum();
+        let team = team.for_work(springs, PARALLEL_MIN_SPRINGS);
+        let over = bands_and_boundaries((phases, flags, flags.begin()), team, |region| {
+            // SAFETY: as in `sweep_with`: disjoint regions, borrowed buffers.
+            let (mut view, moved) = unsafe {
+                (
+                    shared.view(region.lanes.clone()),
+                    moved.range(region.lanes.clone()),
+                )
             };
-            let springs = limits.iter().map(|&(p, _)| work[p]).sum();
-            over += team
-                .for_work(springs, PARALLEL_MIN_SPRINGS)
-                .sum_over(phase, |region| {
-                    // SAFETY: as in `sweep_with`: disjoint regions, borrowed buffers.
-                    let (mut view, moved) = unsafe {
-                        (
-                            shared.view(region.lanes.clone()),
-                            moved.range(region.lanes.clone()),
-                        )
-                    };
-                    // No lane of the region moved in the pass before or
-                    // this one: none of its springs is due (`LimitMarks::due`
-                    // would say so of each), and the region is passed over
-                    // whole. At rest most regions are, after the first pass.
-                    if number > 1 && !moved_since(moved, number - 1) {
-                        return 0;
-                    }
-                    let mut tally = Tally::NONE;
-                    let mut marks = LimitMarks {
-                        moved,
-                        pass: number,
-                        planes: planes.map(|p| (p, region.lanes.start)),
-                    };
-                    for &(p, rest) in limits {
-                        let rest = &rest[region.lanes.clone()];
-                        let runs = &region.runs[p];
-                        let mut t = limit_region(runs, rest, &mut view, factor, (&mut marks, simd));
-                        // The room and the far ones are the stretch springs' alone.
-                        if p >= 4 {
-                            (t.far, t.room) = (0, f32::INFINITY);
-                        }
-                        tally = tally.and(t);
-                    }
-                    room.fetch_min(tally.room.to_bits(), Ordering::Relaxed);
-                    far.fetch_add(tally.far, Ordering::Relaxed);
-                    tally.shortened
-                });
-        }
+            // No lane of the region moved in the pass before or
+            // this one: none of its springs is due (`LimitMarks::due`
+            // would say so of each), and the region is passed over
+            // whole. At rest most regions are, after the first pass.
+            if number > 1 && !moved_since(moved, number - 1) {
+                return 0;
+            }
+            let mut tally = Tally::NONE;
+            let mut marks = LimitMarks {
+                moved,
+                pass: number,
+                planes: planes.map(|p| (p, region.lanes.start)),
+            };
+            for &(p, rest) in limits {
+                let rest = &rest[region.lanes.clone()];
+                let runs = &region.runs[p];
+                let mut t = limit_region(runs, rest, &mut view, factor, (&mut marks, simd));
+                // The room and the far ones are the stretch springs' alone.
+                if p >= 4 {
+                    (t.far, t.room) = (0, f32::INFINITY);
+                }
+                tally = tally.and(t);
+            }
+            room.fetch_min(tally.room.to_bits(), Ordering::Relaxed);
+            far.fetch_add(tally.far, Ordering::Relaxed);
+            tally.shortened
+        });
         Tally {
             shortened: over,
             far: far.into_inner(),
@@ -2268,5 +2345,54 @@ mod tests {
         assert!(GridPlan::new(grid, cloth.springs()).is_some());
         let wider = Grid { cols: 5, rows: 6 };
         assert!(GridPlan::new(wider, cloth.springs()).is_none());
+    }
+
+    /// One handout of both phases runs every band and every boundary once,
+    /// each boundary after its two bands, call after call, on one thread
+    /// and on two (bands of uneven lengths, so that they end in any order).
+    #[test]
+    fn each_boundary_runs_once_after_its_two_bands() {
+        let cloth = ClothBuilder::new(8, 6 * BAND_ROWS).build().unwrap();
+        let plan = GridPlan::new(cloth.grid().unwrap(), cloth.springs()).unwrap();
+        let [bands, boundaries] = &plan.phases;
+        assert_eq!((bands.len(), boundaries.len()), (6, 5));
+        let check = |team: Team| {
+            for call in 0..20u64 {
+                let ran: Vec<AtomicU32> = (0..11).map(|_| AtomicU32::new(0)).collect();
+                let clock = AtomicU32::new(0);
+                let sum = bands_and_boundaries(
+                    (&plan.phases, &plan.flags, plan.flags.begin()),
+                    team,
+                    |region| {
+                        let k = bands
+                            .iter()
+                            .chain(boundaries)
+                            .position(|r| std::ptr::eq(r, region))
+                            .unwrap();
+                        // Uneven work: the bands end in a different order each call.
+                        let spin = (k as u64 * 7 + call * 13) % 11;
+                        std::thread::sleep(std::time::Duration::from_micros(20 * spin));
+                        let tick = clock.fetch_add(1, Ordering::SeqCst) + 1;
+                        assert_eq!(ran[k].swap(tick, Ordering::SeqCst), 0, "region {k} twice");
+                        1
+                    },
+                );
+                assert_eq!(sum, 11);
+                let at = |k: usize| ran[k].load(Ordering::SeqCst);
+                for j in 0..5 {
+                    assert!(
+                        at(6 + j) > at(j) && at(6 + j) > at(j + 1),
+                        "boundary {j} early"
+                    );
+                }
+            }
+        };
+        check(Team::ALONE);
+        #[cfg(feature = "parallel")]
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap()
+            .install(|| crate::parallel::with_team(true, check));
     }
 }
