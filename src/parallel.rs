@@ -257,6 +257,41 @@ mod team {
     #[repr(align(128))]
     struct Cursor(AtomicU64);
 
+    /// A value alone on its cache lines (the prefetcher pulls lines in
+    /// pairs).
+    #[derive(Default)]
+    #[repr(align(128))]
+    struct Alone<T>(T);
+
+    impl<T> std::ops::Deref for Alone<T> {
+        type Target = T;
+        fn deref(&self) -> &T {
+            &self.0
+        }
+    }
+
+    /// The items one member has finished, loop after loop, and the sum of
+    /// what they returned (both wrapping): written by that member alone,
+    /// on a cache line of its own ([`Alone`]). Counters every member
+    /// updated after each item sent their line from core to core: a loop
+    /// of 8 items took 1.25 µs on two threads, of 2 items 0.6; so, 0.7
+    /// and 0.45.
+    #[derive(Default)]
+    struct Finished {
+        done: AtomicU32,
+        sum: AtomicU32,
+    }
+
+    impl Finished {
+        /// One more item finished, which returned `value`.
+        fn add(&self, value: u32) {
+            let sum = self.sum.load(Ordering::Relaxed).wrapping_add(value);
+            self.sum.store(sum, Ordering::Relaxed);
+            let done = self.done.load(Ordering::Relaxed).wrapping_add(1);
+            self.done.store(done, Ordering::Release);
+        }
+    }
+
     /// What the team's threads share.
     pub(crate) struct TeamShared {
         /// The current loop's number and item count.
@@ -272,9 +307,9 @@ mod team {
         /// Whether the current loop's items are taken from a share only
         /// once its owner has stalled ([`Taking`]).
         patient: AtomicBool,
-        /// Items finished, and the sum of what they returned.
-        done: AtomicU32,
-        sum: AtomicU32,
+        /// Per member: the items it finished and the sum of what they
+        /// returned, since the team began.
+        finished: Vec<Alone<Finished>>,
         /// An item panicked.
         panicked: AtomicBool,
         /// The step is over: helpers leave.
@@ -289,8 +324,7 @@ mod team {
                 cursors: (0..members.max(1)).map(|_| Cursor::default()).collect(),
                 job: AtomicPtr::new(std::ptr::null_mut()),
                 patient: AtomicBool::new(true),
-                done: AtomicU32::new(0),
-                sum: AtomicU32::new(0),
+                finished: (0..members.max(1)).map(|_| Alone::default()).collect(),
                 panicked: AtomicBool::new(false),
                 quit: AtomicBool::new(false),
             }
@@ -317,8 +351,8 @@ mod team {
             assert!(count as u64 <= LOW, "at most 2^32 - 1 items in a loop");
             let job: Job = f;
             let count = count as u64;
-            self.done.store(0, Ordering::Relaxed);
-            self.sum.store(0, Ordering::Relaxed);
+            // No member runs an item between loops.
+            let before = self.finished_so_far();
             self.job
                 .store(&job as *const Job as *mut (), Ordering::Relaxed);
             // Shares far apart (one of two items, two of three) are
@@ -344,14 +378,31 @@ mod team {
             // Helpers may still be on their last items; `job` must live until
             // they finish (no item is claimed once all are).
             let mut waited = 0u32;
-            while u64::from(self.done.load(Ordering::Acquire)) < count {
+            let sum = loop {
+                let (done, sum) = self.finished_so_far();
+                if u64::from(done.wrapping_sub(before.0)) >= count {
+                    break sum.wrapping_sub(before.1);
+                }
                 pause(&mut waited);
-            }
+            };
             assert!(
                 !self.panicked.load(Ordering::Relaxed),
                 "a cloth thread panicked"
             );
-            self.sum.load(Ordering::Relaxed)
+            sum
+        }
+
+        /// The items the members have finished and the sum of what they
+        /// returned, since the team began (wrapping).
+        fn finished_so_far(&self) -> (u32, u32) {
+            self.finished.iter().fold((0u32, 0u32), |(done, sum), f| {
+                // The count first: an item's value is stored before it.
+                let d = f.done.load(Ordering::Acquire);
+                (
+                    done.wrapping_add(d),
+                    sum.wrapping_add(f.sum.load(Ordering::Relaxed)),
+                )
+            })
         }
 
         /// Member `me` claims and runs items of loop `number` of `count`
@@ -369,13 +420,11 @@ mod team {
                 let mut seen: Option<(u64, Instant)> = None;
                 loop {
                     let c = cursor.load(Ordering::Acquire);
-                    if c >> 32 != number {
-                        return; // a later loop: this one is done
-                    }
-                    let at = c & LOW;
-                    if at >= end {
+                    // A later loop (this one is done), or the share done.
+                    if c >> 32 != number || c & LOW >= end {
                         break;
                     }
+                    let at = c & LOW;
                     if k > 0 && patient {
                         // Its owner is getting through it: leave it be.
                         match seen {
@@ -397,13 +446,15 @@ mod team {
                     {
                         continue;
                     }
-                    self.run_item(at as usize);
+                    let value = self.run_item(at as usize);
+                    self.finished[me].add(value);
                 }
             }
         }
 
-        /// Runs claimed item `at` of the current loop.
-        fn run_item(&self, at: usize) {
+        /// Runs claimed item `at` of the current loop; returns what it
+        /// returned (0 if it panicked).
+        fn run_item(&self, at: usize) -> u32 {
             // SAFETY: the item is claimed and not done, so `run` of its
             // loop has not returned: its `job` is alive, and the pointer
             // (stored before the loop was published, read after it was)
@@ -412,12 +463,12 @@ mod team {
             // A panic is carried to `run`, which must not unwind while
             // other threads still use `job`.
             match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| job(at))) {
-                Ok(v) => {
-                    self.sum.fetch_add(v, Ordering::Relaxed);
+                Ok(v) => v,
+                Err(_) => {
+                    self.panicked.store(true, Ordering::Relaxed);
+                    0
                 }
-                Err(_) => self.panicked.store(true, Ordering::Relaxed),
             }
-            self.done.fetch_add(1, Ordering::Release);
         }
 
         /// Helper `me` (1 or more): waits for loops, spinning, and works on
