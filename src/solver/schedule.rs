@@ -710,6 +710,6 @@ mod tests {
             .num_threads(2)
             .build()
             .unwrap()
-            .install(|| with_team(true, |team| check(team)));
+            .install(|| with_team(true, check));
     }
 }
