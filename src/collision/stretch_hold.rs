@@ -385,13 +385,7 @@ mod tests {
         x[b] = x[a] + (x[b] - x[a]) * 1.2;
         let answers = |team: Team| [check(&at_rest, team), check(&x, team)];
         assert_eq!(answers(Team::ALONE), [false, true]);
-        #[cfg(feature = "parallel")]
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap()
-            .install(|| {
-                crate::parallel::with_team(true, |team| assert_eq!(answers(team), [false, true]))
-            });
+        let on_two = crate::parallel::on_threads(2, answers);
+        assert_eq!(on_two, [false, true]);
     }
 }

@@ -2388,11 +2388,6 @@ mod tests {
             }
         };
         check(Team::ALONE);
-        #[cfg(feature = "parallel")]
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap()
-            .install(|| crate::parallel::with_team(true, check));
+        crate::parallel::on_threads(2, check);
     }
 }

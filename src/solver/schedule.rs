@@ -705,11 +705,6 @@ mod tests {
             assert_eq!(ws.backup_prev, moved.particles.x_prev);
         };
         check(Team::ALONE);
-        #[cfg(feature = "parallel")]
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap()
-            .install(|| with_team(true, check));
+        crate::parallel::on_threads(2, check);
     }
 }
