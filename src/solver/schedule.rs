@@ -687,9 +687,10 @@ mod tests {
         let mut lost = cloth.clone();
         lost.particles.v[last].y = f32::NAN;
         let mut torn = cloth.clone();
-        // The last particle pulled 20 rest lengths away: its springs (the
-        // last of the stretch springs) far over MAX_STRAIN.
-        torn.particles.x[last].x += 20.0 * 1.0 / 79.0 * (1.0 + MAX_STRAIN);
+        // The last particle pulled 2 (1 + MAX_STRAIN) rest lengths (of
+        // the 1 m sheet's 1/79 m) along x: its springs, among the last
+        // stretch springs, far over MAX_STRAIN.
+        torn.particles.x[last].x += 2.0 * (1.0 + MAX_STRAIN) / 79.0;
         let check = |team: Team| {
             let sane = [&cloth, &lost, &torn].map(|c| is_sane(c, team));
             assert_eq!(sane, [true, false, false]);
