@@ -531,9 +531,9 @@ fn is_sane(cloth: &Cloth, team: Team) -> bool {
     let ok_x = |x: &Vector| x.is_finite() && x.length_squared() < MAX_DISTANCE * MAX_DISTANCE;
     let (x, v) = (cloth.positions(), cloth.velocities());
     let stretch = cloth.springs().range(SpringKind::Stretch);
-    let blocks = x.len().div_ceil(SANE_BLOCK);
+    let blocks = x.len().div_ceil(PARTICLE_BLOCK);
     let insane = team.sum_count(blocks, |b| {
-        let block = b * SANE_BLOCK..((b + 1) * SANE_BLOCK).min(x.len());
+        let block = b * PARTICLE_BLOCK..((b + 1) * PARTICLE_BLOCK).min(x.len());
         // The block's share of the stretch springs, in proportion.
         let share = |p: usize| stretch.start + (stretch.len() * p).div_ceil(x.len().max(1));
         let springs = share(block.start)..share(block.end);
@@ -545,21 +545,21 @@ fn is_sane(cloth: &Cloth, team: Team) -> bool {
     insane == 0
 }
 
-/// Particles a block of the divergence check takes (with their share of
-/// the stretch springs).
-const SANE_BLOCK: usize = 4096;
+/// Particles a block of the step's backups and of its divergence check
+/// (with their share of the stretch springs) takes.
+const PARTICLE_BLOCK: usize = 4096;
 
 /// Copies the particles' positions, velocities and start positions to the
 /// workspace's backups, blocks of particles on the `team` (each the
 /// particles its member's bands hold).
 fn back_up(p: &Particles, ws: &mut super::workspace::Workspace, team: Team) {
     let n = p.x.len();
-    let blocks = n.div_ceil(SANE_BLOCK);
+    let blocks = n.div_ceil(PARTICLE_BLOCK);
     let backups = [&mut ws.backup_x, &mut ws.backup_v, &mut ws.backup_prev]
         .map(|b| Disjoint::new(&mut b[..]));
     let sources = [&p.x, &p.v, &p.x_prev];
     team.sum_count(blocks, |b| {
-        let block = b * SANE_BLOCK..((b + 1) * SANE_BLOCK).min(n);
+        let block = b * PARTICLE_BLOCK..((b + 1) * PARTICLE_BLOCK).min(n);
         for (backup, source) in backups.iter().zip(sources) {
             // SAFETY: blocks are disjoint ranges of particles.
             unsafe { backup.range(block.clone()) }.copy_from_slice(&source[block.clone()]);
@@ -682,7 +682,7 @@ mod tests {
         // 80 × 80: two blocks of particles.
         let cloth = ClothBuilder::new(80, 80).build().unwrap();
         let n = cloth.particle_count();
-        assert!(n > SANE_BLOCK);
+        assert!(n > PARTICLE_BLOCK);
         let last = n - 1;
         let mut lost = cloth.clone();
         lost.particles.v[last].y = f32::NAN;
