@@ -144,9 +144,12 @@ pub(crate) struct GridPlan {
     span: [Vec<f32>; 2],
     /// The longest rest length of a stretch spring (m).
     longest_stretch: f32,
-    /// Per lane: the last pass of the stretch limit that moved it (0: none
-    /// yet this call).
+    /// Per lane: the last pass of the stretch limit that moved it (as
+    /// [`LimitMarks`] counts: at most the call's base, none yet this call).
     limit_moved: Vec<u32>,
+    /// The marks' value before the last call's first pass: a call's marks
+    /// run above every earlier call's ([`GridPlan::next_limit_base`]).
+    limit_base: u32,
 }
 
 /// Below this many springs, a phase of a pass runs on one thread: handing
@@ -375,7 +378,22 @@ impl GridPlan {
             span,
             longest_stretch,
             limit_moved: vec![0; n],
+            limit_base: 0,
         })
+    }
+
+    /// The marks' base for a new call of the stretch limit: pass `k` of it
+    /// marks a lane `base + k`, above any mark of an earlier call, so the
+    /// marks need no fill a call (a fill of every lane a substep, on the
+    /// calling thread, whose lines the other thread then fetched back).
+    /// Filled only when the base would overflow.
+    fn next_limit_base(&mut self) -> u32 {
+        if self.limit_base > u32::MAX - 2 * LIMIT_PASSES {
+            self.limit_moved.fill(0);
+            self.limit_base = 0;
+        }
+        self.limit_base += LIMIT_PASSES;
+        self.limit_base
     }
 
     /// The lane of particle `i`.
@@ -986,7 +1004,7 @@ fn limit_stretch_with(
             unsettled: false,
         };
     }
-    plan.limit_moved.fill(0);
+    let base = plan.next_limit_base();
     let moved = Disjoint::new(&mut plan.limit_moved[..]);
     let shared = SharedLanes::new(lanes, &mut plan.lambda);
     // The pairs of stretch springs along rows and columns first (the bend
@@ -1042,13 +1060,14 @@ fn limit_stretch_with(
             // this one: none of its springs is due (`LimitMarks::due`
             // would say so of each), and the region is passed over
             // whole. At rest most regions are, after the first pass.
-            if number > 1 && !moved_since(moved, number - 1) {
+            if number > 1 && !moved_since(moved, base + number - 1) {
                 return 0;
             }
             let mut tally = Tally::NONE;
             let mut marks = LimitMarks {
                 moved,
-                pass: number,
+                first: number == 1,
+                pass: base + number,
                 planes: planes.map(|p| (p, region.lanes.start)),
             };
             for &(p, rest) in limits {
@@ -1146,10 +1165,12 @@ unsafe fn limit_runs_avx2<const PLANES: bool>(
 }
 
 /// Which lanes of a region a pass of the stretch limit moved: per lane the
-/// last pass that moved it (0: none this call), and this pass's number
-/// (from 1).
+/// last pass that moved it (the call's base plus the pass's number from 1;
+/// at most the base: none this call), this pass's mark, and whether it is
+/// the call's first pass.
 struct LimitMarks<'a> {
     moved: &'a mut [u32],
+    first: bool,
     pass: u32,
     /// The lanes' planes, if the limit holds them ([`limit_stretch`]),
     /// and the region's first lane among all.
@@ -1166,7 +1187,7 @@ impl LimitMarks<'_> {
     /// `a + M` and `b + M` are at most the marks' length.
     #[inline(always)]
     unsafe fn due<const M: usize>(&self, (a, b): (usize, usize)) -> bool {
-        if self.pass == 1 {
+        if self.first {
             return true;
         }
         // SAFETY: in bounds by the caller's promise.
@@ -1893,6 +1914,20 @@ mod tests {
                 .filter(|r| plan.limit_moved[r.lanes.clone()].iter().all(|&m| m == 0))
                 .count();
             assert!(untouched > 0, "every region moved");
+            // Calls again on the same plan: their marks above the first
+            // call's (never filled), and once with the base come round
+            // (the marks filled then): the same bits.
+            for base in [None, Some(u32::MAX - LIMIT_PASSES)] {
+                let (_, mut again) = stretched();
+                if let Some(base) = base {
+                    plan.limit_base = base;
+                }
+                let outcome =
+                    limit_stretch_with(&mut plan, &mut again, (1.02, None), Team::ALONE, simd);
+                assert_eq!(outcome.shortened, shortened);
+                assert_eq!(bits(&mut again), bits(&mut reference));
+            }
+            assert_eq!(plan.limit_base, LIMIT_PASSES, "the base came round");
         }
     }
 
