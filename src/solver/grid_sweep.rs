@@ -2382,6 +2382,41 @@ mod tests {
         assert!(GridPlan::new(wider, cloth.springs()).is_none());
     }
 
+    /// Each boundary's lanes lie within its two bands and meet no other
+    /// boundary's (what `bands_and_boundaries` runs a boundary on), at
+    /// every height from one band to many.
+    #[test]
+    fn a_boundary_lies_within_its_two_bands() {
+        for rows in [
+            BAND_ROWS,
+            2 * BAND_ROWS - 1,
+            2 * BAND_ROWS,
+            37,
+            64,
+            100,
+            129,
+        ] {
+            let cloth = ClothBuilder::new(6, rows).build().unwrap();
+            let plan = GridPlan::new(cloth.grid().unwrap(), cloth.springs()).unwrap();
+            let [bands, boundaries] = &plan.phases;
+            assert_eq!(boundaries.len() + 1, bands.len(), "{rows} rows");
+            for (j, b) in boundaries.iter().enumerate() {
+                let (lo, hi) = (&bands[j].lanes, &bands[j + 1].lanes);
+                assert!(
+                    lo.start <= b.lanes.start && b.lanes.end <= hi.end,
+                    "{rows} rows, boundary {j}"
+                );
+                if let Some(next) = boundaries.get(j + 1) {
+                    assert!(
+                        b.lanes.end <= next.lanes.start,
+                        "{rows} rows, boundaries {j} and {}",
+                        j + 1
+                    );
+                }
+            }
+        }
+    }
+
     /// One handout of both phases runs every band and every boundary once,
     /// each boundary after its two bands, call after call, on one thread
     /// and on two (bands of uneven lengths, so that they end in any order).
