@@ -167,3 +167,87 @@ fn join_refuses_pieces_of_another_material() {
     let text = err.to_string();
     assert!(text.contains("silk") && text.contains("cotton"), "{text}");
 }
+
+/// Cloths of one grid shape joined are stepped on their grids stacked
+/// (`Topology::lane_grid`): with the chain solves, so with the substeps of
+/// one of them alone, and each piece moves as it does alone (no spring
+/// between them, the falling one not held by the hanging one), within a
+/// millimetre.
+#[test]
+fn pieces_of_one_shape_joined_move_as_each_does_alone() {
+    let sheet = |x: f32, pins: PinPreset| {
+        let mut piece = ClothBuilder::new(SIDE, SIDE)
+            .size(0.5, 0.5)
+            .vertical(Vector::new(x, 1.0, 0.0))
+            .pins(pins)
+            .build()
+            .unwrap();
+        piece.params.self_collision = false;
+        piece
+    };
+    // One hangs, the other falls: a spring between them, or a chain
+    // through both, would hold the falling one up.
+    let (left, right) = (
+        sheet(-1.0, PinPreset::TwoCorners),
+        sheet(1.0, PinPreset::None),
+    );
+    let mut joined = Cloth::join(vec![left.clone(), right.clone()]).unwrap();
+    let lanes = joined.topology().lane_grid().expect("a stacked grid");
+    assert_eq!((lanes.grid.cols, lanes.grid.rows), (SIDE, 2 * SIDE));
+    assert_eq!(lanes.piece_rows, SIDE);
+    // Of two shapes: none.
+    let odd = ClothBuilder::new(SIDE, SIDE + 1).build().unwrap();
+    let mixed = Cloth::join(vec![left.clone(), odd]).unwrap();
+    assert!(mixed.topology().lane_grid().is_none());
+
+    let lowest = |c: &Cloth| {
+        c.positions()
+            .iter()
+            .map(|p| p.y)
+            .fold(f32::INFINITY, f32::min)
+    };
+    let start = lowest(&joined);
+    let dt = 1.0 / 60.0;
+    let auto = ClothSolver::default();
+    let k = auto.substeps_for(&joined, dt);
+    assert_eq!(
+        k,
+        auto.substeps_for(&left, dt),
+        "the joined cloth takes the chains' substeps"
+    );
+    // All at those: a free fall's path depends on the substep.
+    let fixed = || {
+        ClothSolver::new(SolverSettings {
+            substeps: Substeps::Fixed(k),
+            ..SolverSettings::default()
+        })
+    };
+    let mut solver = fixed();
+    let mut alone = [left, right].map(|c| (c, fixed()));
+    for _ in 0..90 {
+        solver.step(&mut joined, dt, &[]).unwrap();
+        for (cloth, solver) in &mut alone {
+            solver.step(cloth, dt, &[]).unwrap();
+        }
+    }
+    let n = SIDE * SIDE;
+    let x = joined.positions();
+    for (k, (cloth, _)) in alone.iter().enumerate() {
+        let worst = cloth
+            .positions()
+            .iter()
+            .zip(&x[k * n..(k + 1) * n])
+            .map(|(a, b)| (*a - *b).length())
+            .fold(0.0f32, f32::max);
+        assert!(
+            worst < 1e-3,
+            "piece {k} is {worst} m from where it hangs alone"
+        );
+    }
+    // They moved: one sagged, one fell.
+    assert!(
+        lowest(&joined) < start - 1.0,
+        "{} from {start}",
+        lowest(&joined)
+    );
+}

@@ -28,4 +28,4 @@ pub use pins::PinPreset;
 pub use split::ParticleSplit;
 pub(crate) use split::TopologyEdit;
 pub use springs::{Spring, SpringKind, Springs};
-pub use topology::{Grid, GridPiece, Topology};
+pub use topology::{Grid, GridPiece, LaneGrid, Topology};

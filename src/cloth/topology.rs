@@ -45,6 +45,32 @@ impl GridPiece {
     }
 }
 
+/// The grid the small-steps solver lays a cloth's particles out on
+/// (`solver/grid_sweep.rs`): the cloth's own grid, or for cloths of one
+/// grid shape joined into one, their grids stacked one under the other
+/// (piece `k`'s row `r` is row `k · piece_rows + r`), no spring crossing
+/// from a piece into the next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LaneGrid {
+    /// The whole stack: columns, and rows of every piece together.
+    pub grid: Grid,
+    /// Rows of each piece (`grid.rows` for a grid cloth).
+    pub piece_rows: usize,
+}
+
+impl LaneGrid {
+    /// True when rows `a` and `b` are of the same piece.
+    pub fn same_piece(&self, a: usize, b: usize) -> bool {
+        let rows = self.piece_rows.max(1);
+        a / rows == b / rows
+    }
+
+    /// The longer side (particles) of a piece.
+    pub fn piece_side(&self) -> usize {
+        self.grid.cols.max(self.piece_rows)
+    }
+}
+
 /// The springs, triangles, texture coordinates and grid of a cloth.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Topology {
@@ -106,6 +132,41 @@ impl Topology {
             &[]
         };
         whole.into_iter().chain(joined.iter().copied())
+    }
+
+    /// The grid the small-steps solver lays the particles out on
+    /// ([`LaneGrid`]): the cloth's grid, or the grids of its pieces
+    /// stacked when every particle is in one of them, in order, and all
+    /// have one shape; none otherwise (a torn cloth, a mesh, pieces of
+    /// different widths).
+    pub fn lane_grid(&self) -> Option<LaneGrid> {
+        if let Some(grid) = self.grid {
+            return Some(LaneGrid {
+                grid,
+                piece_rows: grid.rows,
+            });
+        }
+        let first = self.pieces.first()?.grid;
+        let count = first.cols.checked_mul(first.rows)?;
+        let triangles = 2 * first
+            .cols
+            .checked_sub(1)?
+            .checked_mul(first.rows.checked_sub(1)?)?;
+        let stacked = self.pieces.iter().enumerate().all(|(k, piece)| {
+            piece.grid == first
+                && Some(piece.first_particle) == k.checked_mul(count)
+                && Some(piece.first_triangle) == k.checked_mul(triangles)
+        });
+        let rows = first.rows.checked_mul(self.pieces.len())?;
+        let whole = Some(self.uvs.len()) == rows.checked_mul(first.cols)
+            && Some(self.triangles.len()) == triangles.checked_mul(self.pieces.len());
+        (stacked && whole).then_some(LaneGrid {
+            grid: Grid {
+                cols: first.cols,
+                rows,
+            },
+            piece_rows: first.rows,
+        })
     }
 
     /// Every split so far, in order, as (particle split, new particle): a

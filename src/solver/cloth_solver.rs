@@ -134,8 +134,14 @@ pub(super) fn substeps_with(settings: &SolverSettings, cloth: &Cloth, dt: f32) -
                 // sweeps' count, or where the chains apply, as many as
                 // keep a layer closing at `SELF_CLOSING_SPEED` within the
                 // thickness a substep (fewer; stability.rs says why).
+                // Not so for cloths joined into one (their grids stacked,
+                // the chains apply): they land on each other, and the
+                // `stack` crossed itself at 16 substeps (5 crossings to
+                // the end), in a frame or a few at 18, 20, 21 and 24, and
+                // never at 17, 19, 22, 23, 25, 26 and the sweeps' 28.
                 let sweeps = stable_substeps(cloth, &unshortened(settings), dt);
-                let stable = if chains_lengthen(cloth, settings) {
+                let joined = cloth.grid().is_none();
+                let stable = if chains_lengthen(cloth, settings) && !joined {
                     let closing = self_closing_substeps(cloth.self_thickness(), dt);
                     stable_substeps(cloth, settings, dt)
                         .max(closing)

@@ -596,8 +596,11 @@ fn substitute<const M: usize>(
 }
 
 /// The unit direction from `a` to `b` in lane `i` (zero when they
-/// coincide) and the stretch of a spring of rest length `r` between them
-/// (none for a rest length of zero: no spring).
+/// coincide) and the stretch of a spring of rest length `r` between them;
+/// for a rest length of zero (no spring: the gap between two stacked
+/// pieces) both zero, which cuts the chain there: the spring's row of the
+/// system is then decoupled from its neighbours' and its multiplier stays
+/// zero.
 #[inline(always)]
 fn direction<const M: usize>(
     a: &[[f32; M]; 4],
@@ -607,7 +610,7 @@ fn direction<const M: usize>(
 ) -> ([f32; 3], f32) {
     let (dx, dy, dz) = (b[0][i] - a[0][i], b[1][i] - a[1][i], b[2][i] - a[2][i]);
     let l = (dx * dx + dy * dy + dz * dz).sqrt();
-    let inv_l = if l > 0.0 { 1.0 / l } else { 0.0 };
+    let inv_l = if l > 0.0 && r > 0.0 { 1.0 / l } else { 0.0 };
     let stretch = if r > 0.0 { l - r } else { 0.0 };
     ([dx * inv_l, dy * inv_l, dz * inv_l], stretch)
 }
@@ -849,24 +852,27 @@ unsafe fn solve_group<const M: usize>(c: &Chains, j: usize) {
     }
 }
 
-/// True when the chain solves apply to `cloth`: it is a whole grid, with
-/// every spring of the grid's six families (the grid sweep's plan then
+/// True when the chain solves apply to `cloth`: it is a whole grid (or
+/// pieces of one shape joined, [`crate::cloth::LaneGrid`]), with every
+/// spring of the grid's six families (the grid sweep's plan then
 /// exists; `GridPlan::new` checks each spring, this only counts them).
 pub(crate) fn apply_to(cloth: &Cloth) -> bool {
-    let Some(grid) = cloth.grid() else {
+    let Some(lanes) = cloth.topology().lane_grid() else {
         return false;
     };
-    let (c, r) = (grid.cols, grid.rows);
-    if c < 2 || r < 2 {
+    let (c, r) = (lanes.grid.cols, lanes.piece_rows);
+    if c < 2 || r < 2 || lanes.grid.cols * lanes.grid.rows != cloth.particle_count() {
         return false;
     }
+    let pieces = lanes.grid.rows / r;
     let springs = cloth.springs();
     let count = |kind| springs.range(kind).len();
     let full = [
         (c - 1) * r + c * (r - 1),
         2 * (c - 1) * (r - 1),
         c.saturating_sub(2) * r + c * r.saturating_sub(2),
-    ];
+    ]
+    .map(|count| count * pieces);
     [SpringKind::Stretch, SpringKind::Shear, SpringKind::Bend].map(count) == full
 }
 

@@ -21,7 +21,9 @@
 //! 0.3% more stretched; with it, the peak over every frame went 4.61 →
 //! 4.65% (N = 64: 4.50 → 4.56%).
 
-use crate::cloth::{Grid, SpringKind, Springs};
+#[cfg(test)]
+use crate::cloth::Grid;
+use crate::cloth::{LaneGrid, SpringKind, Springs};
 use crate::math::simd_available;
 use crate::parallel::{Disjoint, Team};
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
@@ -248,19 +250,24 @@ fn apart(a: u32, b: u32, len: u32) -> bool {
 }
 
 /// The bands of rows and the boundaries between them, each with the runs
-/// of every family `(dr, dc, period)` that lie in it.
+/// of every family `(dr, dc, period)` that lie in it (a spring from one
+/// stacked piece into the next is none).
 fn regions(
     (cols, blocks): (usize, usize),
-    rows: usize,
+    lanes: LaneGrid,
     families: &[(usize, isize, usize); 6],
 ) -> [Vec<Region>; 2] {
+    let rows = lanes.grid.rows;
     let bands = (rows / BAND_ROWS).max(1);
     let cut = |k: usize| k * rows / bands;
     let region = |first: usize, end: usize, keep: &dyn Fn(usize, usize) -> bool| Region {
         lanes: first * cols..end * cols,
         runs: families
             .iter()
-            .map(|&f| segments((cols, blocks), rows, f, first, |r| keep(r, f.0)))
+            .map(|&f| {
+                let keep = |r: usize| keep(r, f.0) && lanes.same_piece(r, r + f.0);
+                segments((cols, blocks), rows, f, first, keep)
+            })
             .collect(),
     };
     let inside = (0..bands)
@@ -282,8 +289,22 @@ fn regions(
 
 impl GridPlan {
     /// The plan for `springs` on `grid`, or `None` when they are not the grid's families.
+    #[cfg(test)]
     pub fn new(grid: Grid, springs: &Springs) -> Option<GridPlan> {
+        let piece_rows = grid.rows;
+        GridPlan::stacked(LaneGrid { grid, piece_rows }, springs)
+    }
+
+    /// The plan for `springs` on the stacked grid `lanes`, or `None` when
+    /// they are not its pieces' families: every spring of each family
+    /// within each piece, none crossing into another piece.
+    pub fn stacked(lanes: LaneGrid, springs: &Springs) -> Option<GridPlan> {
+        let grid = lanes.grid;
         let (cols, rows) = (grid.cols, grid.rows);
+        if lanes.piece_rows == 0 || !rows.is_multiple_of(lanes.piece_rows) {
+            return None;
+        }
+        let pieces = rows / lanes.piece_rows;
         let n = cols * rows;
         let blocks = row_blocks(cols);
         let off = block_offsets(cols, blocks);
@@ -315,6 +336,9 @@ impl GridPlan {
             }
             let (ri, ci, rj, cj) = (i / cols, i % cols, j / cols, j % cols);
             let (dr, dc) = (rj - ri, cj as isize - ci as isize);
+            if !lanes.same_piece(ri, rj) {
+                return None;
+            }
             let kind = springs.kind(s);
             let f = families
                 .iter()
@@ -326,21 +350,24 @@ impl GridPlan {
             *rest = springs.rest_lengths()[s];
             count[f] += 1;
         }
-        // Every spring of a family present: the loops run over whole rows.
+        // Every spring of a family present in each piece: the loops run over
+        // whole rows (of a piece).
+        let r = lanes.piece_rows;
         let full = [
-            (cols - 1) * rows,
-            cols * (rows - 1),
-            (cols - 1) * (rows - 1),
-            (cols - 1) * (rows - 1),
-            cols.saturating_sub(2) * rows,
-            cols * rows.saturating_sub(2),
-        ];
+            (cols - 1) * r,
+            cols * (r - 1),
+            (cols - 1) * (r - 1),
+            (cols - 1) * (r - 1),
+            cols.saturating_sub(2) * r,
+            cols * r.saturating_sub(2),
+        ]
+        .map(|count| count * pieces);
         if count != full {
             return None;
         }
         let phases = regions(
             (cols, blocks),
-            rows,
+            lanes,
             &families.map(|(_, dr, dc, p)| (dr, dc, p)),
         );
         let work = std::array::from_fn(|phase| {
@@ -1687,7 +1714,7 @@ unsafe fn chunk<const M: usize, const ZERO: bool, const KEPT: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cloth::ClothBuilder;
+    use crate::cloth::{Cloth, ClothBuilder};
 
     /// A 13×9 grid, jittered, with a few pinned particles, as lanes.
     fn setup() -> (GridPlan, Lanes) {
@@ -2230,9 +2257,17 @@ mod tests {
             (40, 5),
             (47, 6),
         ];
-        for (cols, rows) in sizes {
-            let cloth = ClothBuilder::new(cols, rows).build().unwrap();
-            let plan = GridPlan::new(cloth.grid().unwrap(), cloth.springs()).unwrap();
+        let grids = sizes.map(|(cols, rows)| ClothBuilder::new(cols, rows).build().unwrap());
+        // Cloths joined into one: their grids stacked, a band's cut inside a
+        // piece and on a piece's edge.
+        let joined = [(7, 9, 3), (13, 20, 2), (5, 16, 3)].map(|(cols, rows, pieces)| {
+            let piece = ClothBuilder::new(cols, rows).build().unwrap();
+            Cloth::join(vec![piece; pieces]).unwrap()
+        });
+        for cloth in grids.into_iter().chain(joined) {
+            let lanes = cloth.topology().lane_grid().unwrap();
+            let (cols, rows) = (lanes.grid.cols, lanes.grid.rows);
+            let plan = GridPlan::stacked(lanes, cloth.springs()).unwrap();
             let n = cols * rows;
             let mut particle = vec![usize::MAX; n];
             for i in 0..n {
@@ -2261,6 +2296,7 @@ mod tests {
                                 let (la, lb) = (la + base, lb + base);
                                 let (a, b) = (particle[la], particle[lb]);
                                 assert_eq!(b / cols, a / cols + pass.dr, "{cols}x{rows}");
+                                assert!(lanes.same_piece(a / cols, b / cols), "across pieces");
                                 assert_eq!((b % cols) as isize, (a % cols) as isize + pass.dc);
                                 assert!(
                                     plan.rest.get(p)[la] > 0.0,
@@ -2380,6 +2416,21 @@ mod tests {
         assert!(GridPlan::new(grid, cloth.springs()).is_some());
         let wider = Grid { cols: 5, rows: 6 };
         assert!(GridPlan::new(wider, cloth.springs()).is_none());
+        // Two joined: a plan by pieces; none as one grid (the springs
+        // between them missing) nor by pieces of another height.
+        let two = Cloth::join(vec![cloth.clone(), cloth]).unwrap();
+        let lanes = two.topology().lane_grid().unwrap();
+        assert_eq!(lanes.grid, Grid { cols: 6, rows: 10 });
+        assert_eq!(lanes.piece_rows, 5);
+        assert!(GridPlan::stacked(lanes, two.springs()).is_some());
+        assert!(GridPlan::new(lanes.grid, two.springs()).is_none());
+        for piece_rows in [2, 3, 10] {
+            let other = LaneGrid {
+                piece_rows,
+                ..lanes
+            };
+            assert!(GridPlan::stacked(other, two.springs()).is_none());
+        }
     }
 
     /// Each boundary's lanes lie within its two bands and meet no other

@@ -322,7 +322,7 @@ impl ClothSolver {
                 settings: &self.settings,
                 obstacles,
                 mass_revision: cloth.mass_revision,
-                grid: cloth.topology.grid,
+                grid: cloth.topology.lane_grid(),
                 team,
                 moved_after,
                 edges_near,
@@ -496,7 +496,7 @@ const TEAM_MIN_PARTICLES: usize = 2048;
 fn shares_well(cloth: &Cloth, integrator: Integrator) -> bool {
     let n = cloth.particle_count();
     if integrator == Integrator::Xpbd && !cloth.params.self_collision {
-        return cloth.grid().is_some() && n >= XPBD_TEAM_MIN_PARTICLES;
+        return cloth.topology().lane_grid().is_some() && n >= XPBD_TEAM_MIN_PARTICLES;
     }
     n >= TEAM_MIN_PARTICLES
 }

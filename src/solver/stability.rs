@@ -236,9 +236,10 @@ pub fn stable_substep(cloth: &Cloth, settings: &SolverSettings) -> f32 {
         // Damping takes no substeps here: the sweep treats it implicitly,
         // with the springs (a heavily damped cloth steps as fast as a light one).
         Integrator::Xpbd => {
-            let reach = match cloth.grid() {
-                Some(grid) if chains_lengthen(cloth, settings) => {
-                    let side = grid.cols.max(grid.rows) as f32;
+            let reach = match cloth.topology().lane_grid() {
+                Some(lanes) if chains_lengthen(cloth, settings) => {
+                    // A piece's side: the chains stop at a stacked piece's edge.
+                    let side = lanes.piece_side() as f32;
                     let reach = if cloth.material.stretch_limit.is_some() {
                         XPBD_LIMITED_CHAIN_REACH
                     } else {
@@ -285,14 +286,14 @@ pub fn stable_substeps(cloth: &Cloth, settings: &SolverSettings, dt: f32) -> u32
 /// size.
 pub(crate) fn unpinned_substeps(cloth: &Cloth, settings: &SolverSettings, dt: f32) -> u32 {
     let limited = cloth.material.stretch_limit.is_some();
-    match cloth.grid() {
-        Some(grid) if limited && chains_lengthen(cloth, settings) => {
+    match cloth.topology().lane_grid() {
+        Some(lanes) if limited && chains_lengthen(cloth, settings) => {
             // At least XPBD_UNPINNED_SUBSTEPS_PER_SECOND: the side rule's
             // own rate at N = 128 and below.
-            let side = grid.cols.max(grid.rows) as f32;
+            let side = lanes.piece_side() as f32;
             whole_substeps(limited_chain_substeps(side, dt))
         }
-        Some(grid) if grid.cols.max(grid.rows) <= XPBD_UNPINNED_FLOOR_SIDE => {
+        Some(lanes) if lanes.piece_side() <= XPBD_UNPINNED_FLOOR_SIDE => {
             substeps_at_least(cloth, settings, dt, XPBD_UNPINNED_SUBSTEPS_PER_SECOND)
         }
         _ => substeps_at_least(cloth, settings, dt, XPBD_CHAIN_SUBSTEPS_PER_SECOND),

@@ -1,6 +1,6 @@
 //! What every integrator reads during one substep, in one value.
 
-use crate::cloth::Grid;
+use crate::cloth::LaneGrid;
 use crate::collision::Obstacle;
 use crate::context::StepContext;
 use crate::forces::ForceModel;
@@ -20,8 +20,9 @@ pub(crate) struct Substep<'a> {
     pub obstacles: &'a [Obstacle],
     /// The cloth's masses and pins, for caches derived from them.
     pub mass_revision: u64,
-    /// The grid the cloth was built on, if any (for grid-specialised kernels).
-    pub grid: Option<Grid>,
+    /// The grid the small-steps solver lays the particles out on, if any
+    /// (for grid-specialised kernels): the cloth's, or its pieces' stacked.
+    pub grid: Option<LaneGrid>,
     /// The threads the substep's loops may run on.
     pub team: Team<'a>,
     /// A stage after the integrator moves the particles this substep

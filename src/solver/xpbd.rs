@@ -36,7 +36,7 @@
 //! under a steady load ends where `k C` balances the load: the equilibrium
 //! of the force-based integrators.
 
-use crate::cloth::{Grid, SpringKind, SpringParams, Springs};
+use crate::cloth::{LaneGrid, SpringKind, SpringParams, Springs};
 use crate::collision::{CollisionStage, ContactPlanes};
 use crate::forces::{add_wind_forces, ForceModel};
 use crate::math::Vector;
@@ -121,14 +121,14 @@ pub(crate) struct XpbdOutcome {
 /// the same grid but another size makes a new plan).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct PlanKey {
-    grid: Grid,
+    grid: LaneGrid,
     springs: usize,
     count: usize,
     ends: [u32; 2],
 }
 
 impl PlanKey {
-    fn of(grid: Grid, springs: &Springs) -> PlanKey {
+    fn of(grid: LaneGrid, springs: &Springs) -> PlanKey {
         let rest = springs.rest_lengths();
         let bits = |r: Option<&f32>| r.map_or(0, |r| r.to_bits());
         PlanKey {
@@ -181,15 +181,20 @@ pub(crate) fn step(
         alpha: 1.0 / (p.stiffness * h2),
         gamma: p.damping / (p.stiffness * h),
     });
-    if let Some(grid) = sub.grid {
+    // A grid of as many particles as the cloth (one made otherwise, or
+    // pieces that claim another size, is swept as springs).
+    let grid = sub
+        .grid
+        .filter(|g| g.grid.cols.checked_mul(g.grid.rows) == Some(n));
+    if let Some(grid) = grid {
         let key = PlanKey::of(grid, model.springs);
         if ws.planned_for != Some(key) {
-            ws.plan = GridPlan::new(grid, model.springs);
+            ws.plan = GridPlan::stacked(grid, model.springs);
             ws.planned_for = Some(key);
             ws.chains.replanned();
         }
     }
-    match (&mut ws.plan, sub.grid) {
+    match (&mut ws.plan, grid) {
         (Some(plan), Some(_)) => {
             let team = sub.team;
             let l = &mut ws.lanes;
