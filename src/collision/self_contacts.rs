@@ -24,8 +24,14 @@
 //! edges are also paired with the other edges near them, so that two
 //! borders cannot slip past each other.
 //!
+//! A look takes the triangles in runs of a few ([`RUN`]: a grid's cells
+//! along a row), the particles inside the box around a run found once and
+//! tested against each triangle eight at a time where the CPU has AVX2.
+//!
 //! A substep's pass, in pair order (Gauss–Seidel, one thread, the same
-//! bits on any number): for a particle `p` whose projection falls inside
+//! bits on any number; where the CPU has AVX2 a vector test of eight
+//! pairs at a time passes over those the pass would leave as they are,
+//! the pairs of layers apart, with the same bits): for a particle `p` whose projection falls inside
 //! triangle `abc` or within a rim outside its edges (where the cloth bends,
 //! a particle near a common edge may project outside both triangles;
 //! barycentrics `u, v, w`, clamped to the triangle), closer than the
@@ -45,7 +51,7 @@ use super::neighbours::{MeshNeighbours, Sheet};
 use super::patches::Patches;
 use super::spatial_hash::SpatialHash;
 use crate::cloth::{Particles, Topology};
-use crate::math::Vector;
+use crate::math::{simd_available, Vector};
 use crate::parallel::{Disjoint, Team};
 
 /// A particle near a triangle of its own cloth.
@@ -105,6 +111,211 @@ pub struct SelfContacts {
     pairs_of: Option<(u64, u64)>,
     /// How far (m) particles may close in on each other between looks.
     margin: f32,
+    /// The pairs by lanes, for the pass's vector test.
+    lanes: PairLanes,
+    /// Look and pass without AVX2 even where the CPU has it (the tests'
+    /// reference).
+    portable: bool,
+}
+
+/// A look's pairs as lanes ([`SelfContacts::resolve`]'s vector test):
+/// each pair's particle, its triangle's corners and its side, padded to
+/// whole vector steps.
+#[derive(Debug, Default, Clone)]
+struct PairLanes {
+    /// The CPU has AVX2 and the lanes are to be used (else they are left
+    /// empty).
+    simd: bool,
+    /// Pairs, before the padding; the particles their indices are below.
+    len: usize,
+    particles: usize,
+    p: Vec<i32>,
+    corners: [Vec<i32>; 3],
+    side: Vec<f32>,
+}
+
+impl PairLanes {
+    /// The lanes of `pairs` of `triangles` on `particles` particles, for
+    /// a CPU with AVX2 (`simd`); left empty without, or if an index is
+    /// out of range.
+    fn update(
+        &mut self,
+        pairs: &[SelfPair],
+        (triangles, particles): (&[[u32; 3]], usize),
+        simd: bool,
+    ) {
+        self.simd = simd;
+        self.len = 0;
+        self.particles = particles;
+        self.p.clear();
+        self.corners.iter_mut().for_each(Vec::clear);
+        self.side.clear();
+        if !self.simd {
+            return;
+        }
+        let fits = |i: u32| (i as usize) < particles && i <= i32::MAX as u32;
+        for pair in pairs {
+            let Some(&tri) = triangles.get(pair.triangle as usize) else {
+                return;
+            };
+            if !fits(pair.particle) || !tri.into_iter().all(fits) {
+                return;
+            }
+            self.p.push(pair.particle as i32);
+            for (corners, c) in self.corners.iter_mut().zip(tri) {
+                corners.push(c as i32);
+            }
+            self.side.push(pair.side);
+        }
+        let padded = pairs.len().next_multiple_of(LANES);
+        self.p.resize(padded, 0);
+        self.corners.iter_mut().for_each(|c| c.resize(padded, 0));
+        self.side.resize(padded, 0.0);
+        self.len = pairs.len();
+    }
+
+    /// True when the lanes hold `pairs` pairs on `particles` particles and
+    /// the CPU has AVX2.
+    fn usable(&self, pairs: usize, particles: usize) -> bool {
+        self.simd && self.len == pairs && self.particles == particles && pairs > 0
+    }
+
+    /// The first of the eight pairs from `k` that is not surely further
+    /// apart than the thickness (`t2`, m², squared) on its side at
+    /// positions `x`, by [`SelfContacts::pair_pass`]'s first test made a
+    /// hair stricter; [`LANES`] when none is.
+    fn first_not_apart(&self, k: usize, x: &[Vector], layers: (f32, f32)) -> usize {
+        #[cfg(target_arch = "x86_64")]
+        if self.usable(self.len, x.len()) && k < self.len {
+            // SAFETY: usable only with AVX2, with every index below
+            // `x.len()`, and `k` a pair's.
+            return unsafe { self.first_not_apart_avx2(k, x, layers) };
+        }
+        let _ = (k, x, layers);
+        0
+    }
+
+    /// [`Self::first_not_apart`] in AVX2.
+    ///
+    /// # Safety
+    /// The CPU has AVX2; the lanes' indices are below `x.len()`; `k` is
+    /// below `self.len`.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn first_not_apart_avx2(
+        &self,
+        k: usize,
+        x: &[Vector],
+        (thickness, margin): (f32, f32),
+    ) -> usize {
+        use std::arch::x86_64::*;
+        const STRIDE: usize = std::mem::size_of::<Vector>() / std::mem::size_of::<f32>();
+        assert!(k + LANES <= self.p.len() && self.p.len() == self.side.len());
+        assert!(self.corners.iter().all(|c| c.len() == self.p.len()));
+        let base = x.as_ptr() as *const f32;
+        let stride = _mm256_set1_epi32(STRIDE as i32);
+        // SAFETY: `k + LANES` within the lanes (asserted); each index below
+        // `x.len()` (the caller's promise), so each gather reads a
+        // coordinate of a particle.
+        unsafe {
+            let load = |v: &Vec<i32>| {
+                _mm256_mullo_epi32(
+                    _mm256_loadu_si256(v.as_ptr().add(k) as *const __m256i),
+                    stride,
+                )
+            };
+            let point = |at: __m256i| {
+                [
+                    _mm256_i32gather_ps::<4>(base, at),
+                    _mm256_i32gather_ps::<4>(base.add(1), at),
+                    _mm256_i32gather_ps::<4>(base.add(2), at),
+                ]
+            };
+            let p = point(load(&self.p));
+            let a = point(load(&self.corners[0]));
+            let b = point(load(&self.corners[1]));
+            let c = point(load(&self.corners[2]));
+            let sub = |u: [__m256; 3], v: [__m256; 3]| [0, 1, 2].map(|i| _mm256_sub_ps(u[i], v[i]));
+            let (e1, e2, d) = (sub(b, a), sub(c, a), sub(p, a));
+            // e1 × e2, as `Vector::cross`.
+            let m = _mm256_mul_ps;
+            let normal = [
+                _mm256_sub_ps(m(e1[1], e2[2]), m(e2[1], e1[2])),
+                _mm256_sub_ps(m(e1[2], e2[0]), m(e2[2], e1[0])),
+                _mm256_sub_ps(m(e1[0], e2[1]), m(e2[0], e1[1])),
+            ];
+            let dot = |u: [__m256; 3], v: [__m256; 3]| {
+                _mm256_add_ps(_mm256_add_ps(m(u[0], v[0]), m(u[1], v[1])), m(u[2], v[2]))
+            };
+            let len2 = dot(normal, normal);
+            let side = _mm256_loadu_ps(self.side.as_ptr().add(k));
+            let out = m(dot(d, normal), side);
+            let splat = _mm256_set1_ps;
+            let (ge, lt) = (
+                |u, v| _mm256_cmp_ps::<_CMP_GE_OQ>(u, v),
+                |u, v| _mm256_cmp_ps::<_CMP_LT_OQ>(u, v),
+            );
+            let or = _mm256_or_ps;
+            let t2 = thickness * thickness;
+            let apart = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GT_OQ>(out, _mm256_setzero_ps()),
+                _mm256_cmp_ps::<_CMP_GT_OQ>(
+                    m(out, out),
+                    m(m(splat(t2), len2), splat(1.0 + 2.0e-4)),
+                ),
+            );
+            // The distance along the unit normal on the pair's side: at or
+            // past the thickness, or further on the other side than the
+            // margin. Approximate inverses and roots (relative error under
+            // 3.7e-4) with thresholds looser by more: what the pass itself
+            // finds idle, and a few more.
+            let tol = 2.0e-3;
+            let inv_len = _mm256_rsqrt_ps(len2);
+            let scale = m(side, inv_len);
+            let n = normal.map(|c| m(c, scale));
+            let dist = dot(d, n);
+            let far = or(
+                ge(dist, splat(thickness * (1.0 + tol))),
+                lt(dist, splat(-(thickness + margin) * (1.0 + tol))),
+            );
+            // The projection's barycentrics beyond the rim's slack
+            // (`barycentric`, `rim`, `rim_slack`).
+            let q = [0, 1, 2].map(|i| _mm256_sub_ps(d[i], m(n[i], dist)));
+            let (d11, d12, d22) = (dot(e1, e1), dot(e1, e2), dot(e2, e2));
+            let (dq1, dq2) = (dot(q, e1), dot(q, e2));
+            let denom = _mm256_sub_ps(m(d11, d22), m(d12, d12));
+            let inv_denom = _mm256_rcp_ps(denom);
+            let vb = m(_mm256_sub_ps(m(d22, dq1), m(d12, dq2)), inv_denom);
+            let w = m(_mm256_sub_ps(m(d11, dq2), m(d12, dq1)), inv_denom);
+            let u = _mm256_sub_ps(_mm256_sub_ps(splat(1.0), vb), w);
+            let e3 = sub(e2, e1);
+            let d33 = dot(e3, e3);
+            let shortest = _mm256_sqrt_ps(_mm256_min_ps(_mm256_min_ps(d11, d22), d33));
+            let rim = _mm256_min_ps(splat(thickness), m(splat(0.25), shortest));
+            let reach = m(m(rim, inv_len), splat(1.0 + tol));
+            let slack = |edge2: __m256| {
+                let edge = m(edge2, _mm256_rsqrt_ps(edge2));
+                _mm256_sub_ps(
+                    _mm256_setzero_ps(),
+                    _mm256_add_ps(m(reach, edge), splat(tol)),
+                )
+            };
+            let outside = or(lt(u, slack(d33)), or(lt(vb, slack(d22)), lt(w, slack(d11))));
+            // A degenerate triangle: left to the pass itself.
+            let flat = _mm256_cmp_ps::<_CMP_NGT_UQ>(denom, _mm256_setzero_ps());
+            let idle = or(apart, _mm256_andnot_ps(flat, or(far, outside)));
+            // Lanes past the last pair are idle.
+            let lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+            let left = _mm256_set1_epi32((self.len - k).min(LANES) as i32);
+            let real = _mm256_castsi256_ps(_mm256_cmpgt_epi32(left, lane));
+            let bits = _mm256_movemask_ps(_mm256_andnot_ps(idle, real)) as u32;
+            if bits == 0 {
+                LANES
+            } else {
+                bits.trailing_zeros() as usize
+            }
+        }
+    }
 }
 
 /// Triangles a thread takes at a time in a look for pairs (a quarter of
@@ -120,11 +331,51 @@ const BORDER_BLOCK: usize = 64;
 struct EdgeList(Vec<EdgePair>);
 
 /// The pairs a block of triangles found, alone on its cache lines (blocks
-/// on different threads push at once), and a list for the second of two
-/// triangles looked at together ([`Look::two_triangles`]).
+/// on different threads push at once), and the candidates of its runs of
+/// triangles ([`Look::run`]).
 #[derive(Debug, Default, Clone)]
 #[repr(align(128))]
-struct PairList(Vec<SelfPair>, Vec<SelfPair>);
+struct PairList(Vec<SelfPair>, Candidates);
+
+/// Triangles a look takes together ([`Look::run`]): one scan of the hash
+/// over the box around them all, one sort of what it found.
+const RUN: usize = 8;
+
+/// The particles within the box around a run of triangles, in the hash's
+/// order, and their positions (m), coordinate by coordinate; all padded to whole
+/// vector steps (with `u32::MAX`, and NaN, inside no box).
+#[derive(Debug, Default, Clone)]
+struct Candidates {
+    /// How many there are (before the padding).
+    len: usize,
+    p: Vec<u32>,
+    x: [Vec<f32>; 3],
+}
+
+/// Lanes of a vector step over the candidates.
+const LANES: usize = 8;
+
+impl Candidates {
+    /// The particles of `hash` inside the box `lo..=hi` (m), at positions `x`.
+    fn gather(&mut self, hash: &SpatialHash, (lo, hi): (Vector, Vector), x: &[Vector]) {
+        self.p.clear();
+        hash.for_each_inside(lo, hi, |p, _| self.p.push(p));
+        self.len = self.p.len();
+        let padded = self.len.next_multiple_of(LANES);
+        for (a, coordinate) in self.x.iter_mut().enumerate() {
+            coordinate.clear();
+            coordinate.extend(self.p.iter().map(|&p| x[p as usize][a]));
+            coordinate.resize(padded, f32::NAN);
+        }
+        self.p.resize(padded, u32::MAX);
+    }
+
+    /// The candidates: each particle and its position (m).
+    fn iter(&self) -> impl Iterator<Item = (u32, Vector)> + '_ {
+        let [x, y, z] = &self.x;
+        (0..self.len).map(move |k| (self.p[k], Vector::new(x[k], y[k], z[k])))
+    }
+}
 
 /// One look for pairs: the positions and how far to look.
 struct Look<'a> {
@@ -134,6 +385,8 @@ struct Look<'a> {
     /// Thickness plus margin, in metres.
     reach: f32,
     margin: f32,
+    /// The CPU has AVX2 ([`Look::facing_candidates`]).
+    simd: bool,
 }
 
 /// A triangle as a look tests particles against it: its corners' indices,
@@ -214,72 +467,223 @@ impl Look<'_> {
         })
     }
 
-    /// Pushes the pairs of triangle `t` to `out`, in particle order.
-    fn triangle(
+    /// Pushes the pairs of the triangles `ts` (at most [`RUN`]) that `skip`
+    /// does not skip to `out`, in triangle order, each triangle's in
+    /// particle order: the particles inside the box around them all
+    /// gathered once (`cand`), each then tested against the triangles
+    /// whose own box holds it. A run too spread out for one box (a mesh's
+    /// triangles in no spatial order) takes a box a triangle.
+    fn run(
         &self,
-        t: usize,
+        ts: std::ops::Range<usize>,
+        skip: impl Fn(usize) -> bool,
         (hash, neighbours): (&SpatialHash, &MeshNeighbours),
+        cand: &mut Candidates,
         out: &mut Vec<SelfPair>,
     ) {
-        if let Some(f) = self.facing(t, neighbours) {
-            self.facing_pairs(&f, (hash, neighbours), out);
+        let faces: [Option<Facing>; RUN] = std::array::from_fn(|k| {
+            let t = ts.start + k;
+            (t < ts.end && !skip(t))
+                .then(|| self.facing(t, neighbours))
+                .flatten()
+        });
+        let (mut lo, mut hi) = (Vector::INFINITY, Vector::NEG_INFINITY);
+        let mut widest = Vector::ZERO;
+        for f in faces.iter().flatten() {
+            (lo, hi) = (lo.min(f.lo), hi.max(f.hi));
+            widest = widest.max(f.hi - f.lo);
+        }
+        if !lo.cmple(hi).all() {
+            return; // none to look at
+        }
+        // A grid's row of cells spans RUN / 2 cells along the row: up to
+        // that many boxes across one side, about one across the others.
+        let together = (hi - lo).cmple(widest * (RUN as f32 / 2.0 + 1.0)).all();
+        if together {
+            cand.gather(hash, (lo, hi), self.x);
+        }
+        for f in faces.iter().flatten() {
+            if !together {
+                cand.gather(hash, (f.lo, f.hi), self.x);
+            }
+            self.facing_candidates(f, cand, neighbours, out);
         }
     }
 
-    /// Pushes the pairs of the triangle `f` to `out`, in particle order.
-    fn facing_pairs(
+    /// Pushes the pairs of the triangle `f` among the candidates `cand`
+    /// (those inside its box: [`Look::pair`]) to `out`, in their order.
+    fn facing_candidates(
         &self,
         f: &Facing,
-        (hash, neighbours): (&SpatialHash, &MeshNeighbours),
+        cand: &Candidates,
+        neighbours: &MeshNeighbours,
         out: &mut Vec<SelfPair>,
     ) {
         let first = out.len();
-        hash.for_each_inside(f.lo, f.hi, |p, xp| {
+        #[cfg(target_arch = "x86_64")]
+        let done = self.simd && {
+            // SAFETY: `simd` only when the CPU has AVX2.
+            unsafe { self.facing_candidates_avx2(f, cand, neighbours, out) };
+            true
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let done = false;
+        if !done {
+            for (p, xp) in cand.iter() {
+                self.candidate(f, (p, xp), neighbours, out);
+            }
+        }
+        // The hash hands the candidates out by bucket: the triangle's few
+        // pairs in particle order, for the same list whatever the table's
+        // size (a sort of the run's candidates took longer).
+        insertion_sort(&mut out[first..]);
+    }
+
+    /// The pair of candidate `p` at `xp` with `f`, pushed to `out`, if it
+    /// lies inside the triangle's box and is a pair ([`Look::pair`]).
+    #[inline(always)]
+    fn candidate(
+        &self,
+        f: &Facing,
+        (p, xp): (u32, Vector),
+        neighbours: &MeshNeighbours,
+        out: &mut Vec<SelfPair>,
+    ) {
+        // The hash's own test of its points (ordered: NaN is outside).
+        if xp.cmpge(f.lo).all() && xp.cmple(f.hi).all() {
             if let Some(pair) = self.pair(f, (p, xp), neighbours) {
                 out.push(pair);
             }
-        });
-        // The hash hands them out by bucket: particle order, for the same
-        // pass whatever the table's size.
-        out[first..].sort_unstable_by_key(|q| q.particle);
+        }
     }
 
-    /// [`Self::triangle`] on triangles `t` and `t + 1`, from one scan of
-    /// the hash over the box around both (each particle in it tested
-    /// against the triangles whose own box holds it: the same pairs);
-    /// `second` is scratch.
-    fn two_triangles(
+    /// [`Look::facing_candidates`] eight candidates a step: a vector test
+    /// lets through every candidate that may be a pair (its box, its
+    /// distance from the plane and its projection's barycentrics, each a
+    /// hair looser than [`Look::pair`]'s; not a corner), and each of those
+    /// then takes [`Look::candidate`]: the same pairs as one at a time.
+    ///
+    /// # Safety
+    /// The CPU has AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn facing_candidates_avx2(
         &self,
-        t: usize,
-        (hash, neighbours): (&SpatialHash, &MeshNeighbours),
-        (out, second): (&mut Vec<SelfPair>, &mut Vec<SelfPair>),
+        f: &Facing,
+        cand: &Candidates,
+        neighbours: &MeshNeighbours,
+        out: &mut Vec<SelfPair>,
     ) {
-        let both = [self.facing(t, neighbours), self.facing(t + 1, neighbours)];
-        let [Some(f), Some(g)] = &both else {
-            // One has no area (or neither): the other alone.
-            for f in both.iter().flatten() {
-                self.facing_pairs(f, (hash, neighbours), out);
+        use std::arch::x86_64::*;
+        crate::math::align_frame();
+        let [cx, cy, cz] = &cand.x;
+        let len = cand.len;
+        let padded = len.next_multiple_of(LANES);
+        assert!(cx.len() == padded && cy.len() == padded && cz.len() == padded);
+        assert!(cand.p.len() == padded);
+        let splat = _mm256_set1_ps;
+        let (lo, hi, a, n) = (f.lo, f.hi, f.a, f.n);
+        let (e1, e2) = (f.e1, f.e2);
+        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let denom = d11 * d22 - d12 * d12;
+        if !is_positive(denom) {
+            return; // every candidate outside (`barycentric`)
+        }
+        let inv = splat(1.0 / denom);
+        // Looser than the exact test: the inverse instead of a division.
+        let reach = splat(self.reach * (1.0 + 1.0e-4));
+        let slack = f.slack.map(|s| splat(-s - 1.0e-3));
+        let corner = f.tri.map(|c| _mm256_set1_epi32(c as i32));
+        let abs = _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX));
+        let one = splat(1.0);
+        let mut k = 0;
+        while k < len {
+            // SAFETY: `k + LANES <= padded`, the arrays' length (asserted).
+            let (x, y, z, p) = unsafe {
+                (
+                    _mm256_loadu_ps(cx.as_ptr().add(k)),
+                    _mm256_loadu_ps(cy.as_ptr().add(k)),
+                    _mm256_loadu_ps(cz.as_ptr().add(k)),
+                    _mm256_loadu_si256(cand.p.as_ptr().add(k) as *const __m256i),
+                )
+            };
+            let within = |v, lo: f32, hi: f32| {
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_GE_OQ>(v, splat(lo)),
+                    _mm256_cmp_ps::<_CMP_LE_OQ>(v, splat(hi)),
+                )
+            };
+            let boxed = _mm256_and_ps(
+                within(x, lo.x, hi.x),
+                _mm256_and_ps(within(y, lo.y, hi.y), within(z, lo.z, hi.z)),
+            );
+            // The offsets from corner a, the distance from the plane.
+            let (dx, dy, dz) = (
+                _mm256_sub_ps(x, splat(a.x)),
+                _mm256_sub_ps(y, splat(a.y)),
+                _mm256_sub_ps(z, splat(a.z)),
+            );
+            let d = _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(dx, splat(n.x)), _mm256_mul_ps(dy, splat(n.y))),
+                _mm256_mul_ps(dz, splat(n.z)),
+            );
+            let near = _mm256_cmp_ps::<_CMP_NGE_UQ>(_mm256_and_ps(d, abs), reach);
+            // The projection's barycentrics.
+            let (qx, qy, qz) = (
+                _mm256_sub_ps(dx, _mm256_mul_ps(splat(n.x), d)),
+                _mm256_sub_ps(dy, _mm256_mul_ps(splat(n.y), d)),
+                _mm256_sub_ps(dz, _mm256_mul_ps(splat(n.z), d)),
+            );
+            let dot = |e: Vector| {
+                _mm256_add_ps(
+                    _mm256_add_ps(_mm256_mul_ps(qx, splat(e.x)), _mm256_mul_ps(qy, splat(e.y))),
+                    _mm256_mul_ps(qz, splat(e.z)),
+                )
+            };
+            let (dq1, dq2) = (dot(e1), dot(e2));
+            let vb = _mm256_mul_ps(
+                _mm256_sub_ps(
+                    _mm256_mul_ps(splat(d22), dq1),
+                    _mm256_mul_ps(splat(d12), dq2),
+                ),
+                inv,
+            );
+            let w = _mm256_mul_ps(
+                _mm256_sub_ps(
+                    _mm256_mul_ps(splat(d11), dq2),
+                    _mm256_mul_ps(splat(d12), dq1),
+                ),
+                inv,
+            );
+            let u = _mm256_sub_ps(_mm256_sub_ps(one, vb), w);
+            let inside = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_NLT_UQ>(u, slack[0]),
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_NLT_UQ>(vb, slack[1]),
+                    _mm256_cmp_ps::<_CMP_NLT_UQ>(w, slack[2]),
+                ),
+            );
+            // Not a corner (the padding is outside every box).
+            let corner = _mm256_or_si256(
+                _mm256_cmpeq_epi32(p, corner[0]),
+                _mm256_or_si256(
+                    _mm256_cmpeq_epi32(p, corner[1]),
+                    _mm256_cmpeq_epi32(p, corner[2]),
+                ),
+            );
+            let keep = _mm256_andnot_ps(
+                _mm256_castsi256_ps(corner),
+                _mm256_and_ps(_mm256_and_ps(boxed, near), inside),
+            );
+            let mut bits = _mm256_movemask_ps(keep) as u32;
+            while bits != 0 {
+                let j = k + bits.trailing_zeros() as usize;
+                let xp = Vector::new(cx[j], cy[j], cz[j]);
+                self.candidate(f, (cand.p[j], xp), neighbours, out);
+                bits &= bits - 1;
             }
-            return;
-        };
-        let inside = |xp: Vector, f: &Facing| xp.cmpge(f.lo).all() && xp.cmple(f.hi).all();
-        let first = out.len();
-        second.clear();
-        hash.for_each_inside(f.lo.min(g.lo), f.hi.max(g.hi), |p, xp| {
-            if inside(xp, f) {
-                if let Some(pair) = self.pair(f, (p, xp), neighbours) {
-                    out.push(pair);
-                }
-            }
-            if inside(xp, g) {
-                if let Some(pair) = self.pair(g, (p, xp), neighbours) {
-                    second.push(pair);
-                }
-            }
-        });
-        out[first..].sort_unstable_by_key(|q| q.particle);
-        second.sort_unstable_by_key(|q| q.particle);
-        out.extend_from_slice(second);
+            k += LANES;
+        }
     }
 }
 
@@ -313,34 +717,29 @@ impl Look<'_> {
         let sheet = neighbours.sheet([ia, ib, ib], self.reach + 2.0 * length);
         let borders = neighbours.border_edges();
         let first = out.len();
-        let length2 = u.length_squared();
+        // An edge with a point within reach of this one meets the box
+        // around this edge padded by the reach (a hair more spares the
+        // rounding): most of the edges from the particles in the wider
+        // box do not, and skip the closest points (a test of how far each
+        // particle lay beyond reach, with a root each, spared fewer: the
+        // look of the `stack` 14.7 → 13.4 ms a frame on one thread).
+        let near = Vector::splat(self.reach * 1.01);
+        let (near_lo, near_hi) = (a.min(b) - near, a.max(b) + near);
         hash.for_each_inside(lo, hi, |e, xe| {
             if sheet.holds(e) || e == ia || e == ib {
                 return;
             }
-            // How far e lies beyond reach of the border edge: an edge from e
-            // with a point within reach of it is at least that long (a hair
-            // more spares the rounding: the pairs are those of the look
-            // without this test).
-            let along = if length2 > 0.0 {
-                ((xe - a).dot(u) / length2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let beyond = (xe - a - u * along).length() - self.reach;
-            let shortest2 = if beyond > 0.0 {
-                beyond * beyond * (1.0 - 1.0e-3)
-            } else {
-                0.0
-            };
             for &f in neighbours.ring(e) {
                 let xf = x[f as usize];
+                if !(xe.min(xf).cmple(near_hi).all() && xe.max(xf).cmpge(near_lo).all()) {
+                    continue;
+                }
                 // Each edge once: from its lower end when both ends are
                 // in the box.
                 if f < e && inside(xf) {
                     continue;
                 }
-                if f == ia || f == ib || (xf - xe).length_squared() < shortest2 || sheet.holds(f) {
+                if f == ia || f == ib || sheet.holds(f) {
                     continue;
                 }
                 let (p, q) = (e.min(f), e.max(f));
@@ -508,6 +907,7 @@ impl SelfContacts {
             thickness,
             reach: thickness + self.margin,
             margin: self.margin,
+            simd: simd_available() && !self.portable,
         };
         // Cells about twice a triangle's width or the reach: a triangle's
         // box meets a few (drape N = 64: 8% faster a frame than cells of
@@ -547,29 +947,22 @@ impl SelfContacts {
                 return 0;
             }
             // SAFETY: block `k` alone uses list `k`.
-            let PairList(list, second) = unsafe { &mut lists.range(k..k + 1)[0] };
+            let PairList(list, candidates) = unsafe { &mut lists.range(k..k + 1)[0] };
             list.clear();
             let end = ((k + 1) * TRIANGLE_BLOCK).min(triangles.len());
-            // Two at a time: a grid's two triangles of a cell (and a
-            // mesh's neighbours, mostly) share most of their box, whose
-            // scan of the hash is then paid once.
-            let mut t = k * TRIANGLE_BLOCK;
-            while t < end {
-                let pair = [t, t + 1].map(|t| t < end && !patches.quiet_triangle(t));
-                match pair {
-                    [true, true] => look.two_triangles(t, (hash, neighbours), (list, second)),
-                    [true, false] => look.triangle(t, (hash, neighbours), list),
-                    [false, true] => look.triangle(t + 1, (hash, neighbours), list),
-                    [false, false] => {}
-                }
-                t += 2;
+            // A run at a time: a grid's triangles of a few cells along a
+            // row (and a mesh's neighbours, mostly) share most of their
+            // box, whose scan of the hash is then paid once.
+            for t in (k * TRIANGLE_BLOCK..end).step_by(RUN) {
+                let run = t..(t + RUN).min(end);
+                let quiet = |t| patches.quiet_triangle(t);
+                look.run(run, quiet, (hash, neighbours), candidates, list);
             }
             0
         });
         for list in &mut self.blocks[..blocks] {
             self.pairs.extend_from_slice(&list.0);
             headroom(&mut list.0);
-            headroom(&mut list.1);
         }
         headroom(&mut self.pairs);
         self.edge_pairs.clear();
@@ -578,6 +971,8 @@ impl SelfContacts {
             headroom(&mut list.0);
         }
         headroom(&mut self.edge_pairs);
+        let simd = simd_available() && !self.portable;
+        self.lanes.update(&self.pairs, (triangles, x.len()), simd);
     }
 
     /// One pass over the pairs (module docs); returns how many were
@@ -589,11 +984,7 @@ impl SelfContacts {
         params: &SelfContactParams,
     ) -> u32 {
         let Particles { x, v, inv_mass, .. } = particles;
-        let SelfContactParams {
-            thickness,
-            friction,
-            h,
-        } = *params;
+        let thickness = params.thickness;
         let mut touching = 0;
         // The pairs come by triangle (a look's blocks join in triangle
         // order): what depends on the triangle alone is found once for
@@ -601,87 +992,30 @@ impl SelfContacts {
         // particle (it may have moved a corner). The same values as a
         // pair's own: the same expressions of the same positions.
         let mut near: Option<Near> = None;
-        for pair in &self.pairs {
-            let f = match &mut near {
-                Some(f) if f.t == pair.triangle => f,
-                _ => {
-                    let Some(&tri) = topology.triangles.get(pair.triangle as usize) else {
-                        continue;
-                    };
-                    near.insert(Near::of(pair.triangle, tri, x))
+        let pair_pass =
+            |pair: &SelfPair, near: &mut Option<Near>, x: &mut [Vector], v: &mut [Vector]| {
+                self.pair_pass(pair, near, (x, v, inv_mass), (topology, params))
+            };
+        let n = self.pairs.len();
+        if self.lanes.usable(n, x.len()) {
+            // Eight pairs at a time: a vector test finds the first that is
+            // not surely apart; those before it would change nothing and
+            // are passed over, and from it to the eighth each takes the
+            // pass one at a time (from positions the pairs before moved):
+            // the bits of the pass one pair at a time.
+            for k in (0..n).step_by(LANES) {
+                let first = self.lanes.first_not_apart(k, x, (thickness, self.margin));
+                if first < LANES {
+                    near = None;
+                    for pair in &self.pairs[k + first..(k + LANES).min(n)] {
+                        touching += pair_pass(pair, &mut near, x, v);
+                    }
                 }
-            };
-            let [ia, ib, ic] = f.tri;
-            let ip = pair.particle as usize;
-            let (a, xp, normal, len2) = (f.a, x[ip], f.normal, f.len2);
-            // Surely further than the thickness out on its side, told
-            // without the root and the division (most pairs of layers at
-            // rest; a fifth of the `stack`'s frame went to this pass). A
-            // hair of margin: a pair near the thickness takes the exact
-            // test below, so the pass keeps its bits.
-            let out = (xp - a).dot(normal) * pair.side;
-            if out > 0.0 && out * out > thickness * thickness * len2 * (1.0 + 1.0e-4) {
-                continue;
             }
-            let Some((len, slack)) = f.rim_slack(thickness) else {
-                continue;
-            };
-            let (e1, e2) = (f.e1, f.e2);
-            let n = normal * (pair.side / len);
-            let d = (xp - a).dot(n);
-            if d >= thickness {
-                continue;
+        } else {
+            for pair in &self.pairs {
+                touching += pair_pass(pair, &mut near, x, v);
             }
-            // Further on the other side than particles can have moved since
-            // the look (the margin): not a crossing but a pair the cloth has
-            // turned away from (a fold, a swing).
-            if d < -(thickness + self.margin) {
-                continue;
-            }
-            let bary = barycentric(xp - n * d - a, e1, e2);
-            if (0..3).any(|k| bary[k] < -slack[k]) {
-                continue;
-            }
-            // Just outside the rim, the nearest point of the edge takes it.
-            let [u, vb, w] = clamped(bary);
-            let [wp, wa, wb, wc] = [ip, ia, ib, ic].map(|i| inv_mass[i]);
-            let weight = wp + wa * u * u + wb * vb * vb + wc * w * w;
-            if !is_positive(weight) {
-                continue;
-            }
-            touching += 1;
-            // Positions: out to the thickness along n.
-            // At most half the thickness a pass: a layer pressed from both
-            // sides (a crumpled fold) is eased apart over a few substeps,
-            // not yanked by contradicting pairs.
-            let depth = (thickness - d).min(0.5 * thickness);
-            let s = depth / weight;
-            x[ip] += n * (wp * s);
-            x[ia] -= n * (wa * u * s);
-            x[ib] -= n * (wb * vb * s);
-            x[ic] -= n * (wc * w * s);
-            // Velocities: no closing, then friction on the sliding part.
-            let surface = v[ia] * u + v[ib] * vb + v[ic] * w;
-            let rel = v[ip] - surface;
-            let vn = rel.dot(n);
-            let closing = (-vn).max(0.0);
-            let slide = rel - n * vn;
-            let speed = slide.length();
-            let grip = friction * (closing + depth / h);
-            let slide_change = if speed > 0.0 {
-                slide * -(grip / speed).min(1.0)
-            } else {
-                Vector::ZERO
-            };
-            // The change of relative velocity `dv` takes an impulse `dv / weight`
-            // (per unit inverse mass), shared as the positions were.
-            let j = (n * closing + slide_change) / weight;
-            v[ip] += j * wp;
-            v[ia] -= j * (wa * u);
-            v[ib] -= j * (wb * vb);
-            v[ic] -= j * (wc * w);
-            // Positions moved: the next pair finds its triangle afresh.
-            near = None;
         }
         for pair in &self.edge_pairs {
             let ([ia, ib], [ip, iq]) = (
@@ -720,6 +1054,104 @@ impl SelfContacts {
             }
         }
         touching
+    }
+
+    /// The pass of one pair (module docs), with the triangle's values of
+    /// `near` when it is that pair's triangle (else found again there);
+    /// returns 1 when the pair was closer than the thickness, else 0.
+    #[inline(always)]
+    fn pair_pass(
+        &self,
+        pair: &SelfPair,
+        near: &mut Option<Near>,
+        (x, v, inv_mass): (&mut [Vector], &mut [Vector], &[f32]),
+        (topology, params): (&Topology, &SelfContactParams),
+    ) -> u32 {
+        let SelfContactParams {
+            thickness,
+            friction,
+            h,
+        } = *params;
+        let f = match near {
+            Some(f) if f.t == pair.triangle => f,
+            _ => {
+                let Some(&tri) = topology.triangles.get(pair.triangle as usize) else {
+                    return 0;
+                };
+                near.insert(Near::of(pair.triangle, tri, x))
+            }
+        };
+        let [ia, ib, ic] = f.tri;
+        let ip = pair.particle as usize;
+        let (a, xp, normal, len2) = (f.a, x[ip], f.normal, f.len2);
+        // Surely further than the thickness out on its side, told
+        // without the root and the division (most pairs of layers at
+        // rest; a fifth of the `stack`'s frame went to this pass). A
+        // hair of margin: a pair near the thickness takes the exact
+        // test below, so the pass keeps its bits.
+        let out = (xp - a).dot(normal) * pair.side;
+        if out > 0.0 && out * out > thickness * thickness * len2 * (1.0 + 1.0e-4) {
+            return 0;
+        }
+        let Some((len, slack)) = f.rim_slack(thickness) else {
+            return 0;
+        };
+        let (e1, e2) = (f.e1, f.e2);
+        let n = normal * (pair.side / len);
+        let d = (xp - a).dot(n);
+        if d >= thickness {
+            return 0;
+        }
+        // Further on the other side than particles can have moved since
+        // the look (the margin): not a crossing but a pair the cloth has
+        // turned away from (a fold, a swing).
+        if d < -(thickness + self.margin) {
+            return 0;
+        }
+        let bary = barycentric(xp - n * d - a, e1, e2);
+        if (0..3).any(|k| bary[k] < -slack[k]) {
+            return 0;
+        }
+        // Just outside the rim, the nearest point of the edge takes it.
+        let [u, vb, w] = clamped(bary);
+        let [wp, wa, wb, wc] = [ip, ia, ib, ic].map(|i| inv_mass[i]);
+        let weight = wp + wa * u * u + wb * vb * vb + wc * w * w;
+        if !is_positive(weight) {
+            return 0;
+        }
+        // Positions: out to the thickness along n.
+        // At most half the thickness a pass: a layer pressed from both
+        // sides (a crumpled fold) is eased apart over a few substeps,
+        // not yanked by contradicting pairs.
+        let depth = (thickness - d).min(0.5 * thickness);
+        let s = depth / weight;
+        x[ip] += n * (wp * s);
+        x[ia] -= n * (wa * u * s);
+        x[ib] -= n * (wb * vb * s);
+        x[ic] -= n * (wc * w * s);
+        // Velocities: no closing, then friction on the sliding part.
+        let surface = v[ia] * u + v[ib] * vb + v[ic] * w;
+        let rel = v[ip] - surface;
+        let vn = rel.dot(n);
+        let closing = (-vn).max(0.0);
+        let slide = rel - n * vn;
+        let speed = slide.length();
+        let grip = friction * (closing + depth / h);
+        let slide_change = if speed > 0.0 {
+            slide * -(grip / speed).min(1.0)
+        } else {
+            Vector::ZERO
+        };
+        // The change of relative velocity `dv` takes an impulse `dv / weight`
+        // (per unit inverse mass), shared as the positions were.
+        let j = (n * closing + slide_change) / weight;
+        v[ip] += j * wp;
+        v[ia] -= j * (wa * u);
+        v[ib] -= j * (wb * vb);
+        v[ic] -= j * (wc * w);
+        // Positions moved: the next pair finds its triangle afresh.
+        *near = None;
+        1
     }
 }
 
@@ -802,6 +1234,17 @@ fn clamped([u, v, w]: [f32; 3]) -> [f32; 3] {
     let [u, v, w] = [u.max(0.0), v.max(0.0), w.max(0.0)];
     let sum = u + v + w;
     [u / sum, v / sum, w / sum]
+}
+
+/// Sorts a few pairs by particle (the pairs of one triangle: a handful).
+fn insertion_sort(pairs: &mut [SelfPair]) {
+    for i in 1..pairs.len() {
+        let mut j = i;
+        while j > 0 && pairs[j - 1].particle > pairs[j].particle {
+            pairs.swap(j - 1, j);
+            j -= 1;
+        }
+    }
 }
 
 /// Makes room for twice the list's length, so that a step whose pairs
@@ -936,5 +1379,120 @@ mod tests {
         fresh.begin_step(&mut look, &basis, Team::ALONE);
         assert_eq!(fresh.pairs, contacts.pairs);
         assert_eq!(fresh.edge_pairs, contacts.edge_pairs);
+    }
+
+    /// Three 12 × 12 sheets joined, crumpled and laid 4 mm apart, 5 mm
+    /// layers: pairs within reach everywhere, some closer than the
+    /// thickness.
+    fn crumpled_layers() -> (crate::cloth::Cloth, Vec<Vector>) {
+        let sheet = ClothBuilder::new(12, 12).size(0.3, 0.3).build().unwrap();
+        let cloth = crate::cloth::Cloth::join(vec![sheet; 3]).unwrap();
+        let x = cloth
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| {
+                let layer = (i / 144) as f32;
+                let bump = 0.004 * ((p.x * 23.0).sin() + (p.z * 17.0 + layer).cos());
+                Vector::new(p.x + 0.003 * layer, 0.004 * layer + bump, p.z)
+            })
+            .collect();
+        (cloth, x)
+    }
+
+    /// A look by runs of triangles, with its vector test and without,
+    /// finds the pairs of each triangle tested against every particle in
+    /// turn (the look's definition: inside the triangle's box, and a
+    /// pair), in triangle order, each triangle's in particle order.
+    #[test]
+    fn a_look_by_runs_finds_the_pairs_of_every_particle_against_every_triangle() {
+        let (cloth, x) = crumpled_layers();
+        let topology = &*cloth.topology;
+        let basis = LookBasis {
+            topology,
+            particles: x.len(),
+            revision: cloth.mass_revision,
+            thickness: 0.005,
+            margin: 0.005,
+        };
+        for portable in [false, true] {
+            let mut contacts = SelfContacts {
+                portable,
+                ..SelfContacts::default()
+            };
+            let mut look = None;
+            contacts.begin_step(&mut look, &basis, Team::ALONE);
+            contacts.find(&mut look, &x, &basis, Team::ALONE);
+            let reference = Look {
+                x: &x,
+                topology,
+                thickness: basis.thickness,
+                reach: basis.thickness + contacts.margin,
+                margin: contacts.margin,
+                simd: false,
+            };
+            let mut want = Vec::new();
+            for t in 0..topology.triangles.len() {
+                if contacts.patches.quiet_triangle(t) {
+                    continue;
+                }
+                if let Some(f) = reference.facing(t, &contacts.neighbours) {
+                    for (p, &xp) in x.iter().enumerate() {
+                        reference.candidate(&f, (p as u32, xp), &contacts.neighbours, &mut want);
+                    }
+                }
+            }
+            assert!(want.len() > 1000, "only {} pairs", want.len());
+            assert_eq!(contacts.pairs, want, "portable: {portable}");
+        }
+    }
+
+    /// The pass eight pairs at a time (a vector test passing over the
+    /// idle ones) gives the bits of the pass one pair at a time, pass
+    /// after pass, and as many pairs closer than the thickness.
+    #[test]
+    fn the_pass_by_eights_gives_the_bits_of_one_pair_at_a_time() {
+        let (cloth, x) = crumpled_layers();
+        let topology = &*cloth.topology;
+        let basis = LookBasis {
+            topology,
+            particles: x.len(),
+            revision: cloth.mass_revision,
+            thickness: 0.005,
+            margin: 0.005,
+        };
+        let params = SelfContactParams {
+            thickness: basis.thickness,
+            friction: 0.3,
+            h: 1.0e-3,
+        };
+        let run = |portable: bool| {
+            let mut contacts = SelfContacts {
+                portable,
+                ..SelfContacts::default()
+            };
+            let mut look = None;
+            contacts.begin_step(&mut look, &basis, Team::ALONE);
+            contacts.find(&mut look, &x, &basis, Team::ALONE);
+            assert_eq!(
+                contacts.lanes.usable(contacts.pairs.len(), x.len()),
+                !portable && simd_available()
+            );
+            let mut particles = cloth.particles.clone();
+            particles.x.copy_from_slice(&x);
+            for (i, v) in particles.v.iter_mut().enumerate() {
+                *v = Vector::new(0.0, -0.3 * ((i % 7) as f32 - 3.0), 0.1);
+            }
+            let touching: Vec<u32> = (0..4)
+                .map(|_| contacts.resolve(&mut particles, topology, &params))
+                .collect();
+            let bits = |v: &[Vector]| -> Vec<[u32; 3]> {
+                v.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
+            };
+            (touching, bits(&particles.x), bits(&particles.v))
+        };
+        let (batched, one) = (run(false), run(true));
+        assert!(one.0[0] > 50, "only {:?} pairs touching", one.0);
+        assert_eq!(batched, one);
     }
 }
