@@ -28,10 +28,13 @@
 //! along a row), the particles inside the box around a run found once and
 //! tested against each triangle eight at a time where the CPU has AVX2.
 //!
-//! A substep's pass, in pair order (Gauss–Seidel, one thread, the same
-//! bits on any number; where the CPU has AVX2 a vector test of eight
-//! pairs at a time passes over those the pass would leave as they are,
-//! the pairs of layers apart, with the same bits): for a particle `p` whose projection falls inside
+//! A substep's pass, in pair order (Gauss–Seidel) within each of three
+//! parts ([`PassParts`]): the pairs below a plane across the cloth and
+//! those above it on two threads at once, then those across it (the same
+//! bits on any number of threads). Where the CPU has AVX2 a vector test
+//! of eight pairs at a time passes over those the pass would leave as
+//! they are (the pairs of layers apart), with the same bits. For a
+//! particle `p` whose projection falls inside
 //! triangle `abc` or within a rim outside its edges (where the cloth bends,
 //! a particle near a common edge may project outside both triangles;
 //! barycentrics `u, v, w`, clamped to the triangle), closer than the
@@ -111,8 +114,9 @@ pub struct SelfContacts {
     pairs_of: Option<(u64, u64)>,
     /// How far (m) particles may close in on each other between looks.
     margin: f32,
-    /// The pairs by lanes, for the pass's vector test.
-    lanes: PairLanes,
+    /// The pairs in parts for a pass on two threads, and by lanes for
+    /// its vector test.
+    parts: PassParts,
     /// Look and pass without AVX2 even where the CPU has it (the tests'
     /// reference).
     portable: bool,
@@ -184,11 +188,12 @@ impl PairLanes {
     /// apart than the thickness (`t2`, m², squared) on its side at
     /// positions `x`, by [`SelfContacts::pair_pass`]'s first test made a
     /// hair stricter; [`LANES`] when none is.
-    fn first_not_apart(&self, k: usize, x: &[Vector], layers: (f32, f32)) -> usize {
+    fn first_not_apart(&self, k: usize, x: &Points, layers: (f32, f32)) -> usize {
         #[cfg(target_arch = "x86_64")]
-        if self.usable(self.len, x.len()) && k < self.len {
+        if self.usable(self.len, x.len) && k < self.len {
             // SAFETY: usable only with AVX2, with every index below
-            // `x.len()`, and `k` a pair's.
+            // `x.len`, and `k` a pair's; the pairs' particles are this
+            // part's.
             return unsafe { self.first_not_apart_avx2(k, x, layers) };
         }
         let _ = (k, x, layers);
@@ -198,21 +203,22 @@ impl PairLanes {
     /// [`Self::first_not_apart`] in AVX2.
     ///
     /// # Safety
-    /// The CPU has AVX2; the lanes' indices are below `x.len()`; `k` is
-    /// below `self.len`.
+    /// The CPU has AVX2; the lanes' indices are below `x.len`; `k` is
+    /// below `self.len`; no other thread writes the particles of these
+    /// pairs meanwhile.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn first_not_apart_avx2(
         &self,
         k: usize,
-        x: &[Vector],
+        x: &Points,
         (thickness, margin): (f32, f32),
     ) -> usize {
         use std::arch::x86_64::*;
         const STRIDE: usize = std::mem::size_of::<Vector>() / std::mem::size_of::<f32>();
         assert!(k + LANES <= self.p.len() && self.p.len() == self.side.len());
         assert!(self.corners.iter().all(|c| c.len() == self.p.len()));
-        let base = x.as_ptr() as *const f32;
+        let base = x.ptr as *const f32;
         let stride = _mm256_set1_epi32(STRIDE as i32);
         // SAFETY: `k + LANES` within the lanes (asserted); each index below
         // `x.len()` (the caller's promise), so each gather reads a
@@ -315,6 +321,118 @@ impl PairLanes {
                 bits.trailing_zeros() as usize
             }
         }
+    }
+}
+
+/// A look's pairs in three parts ([`SelfContacts::resolve`]): those whose
+/// particles (the pair's own and its triangle's corners) all lay below a
+/// plane across the cloth at the look, those whose all lay above it, and
+/// the rest. The first two share no particle, so that a pass may take
+/// them on two threads at once, then the rest: the same bits on one
+/// thread or two. The plane is across the widest side of the particles'
+/// box, through their median.
+#[derive(Debug, Default, Clone)]
+struct PassParts {
+    pairs: [Vec<SelfPair>; 3],
+    lanes: [PairLanes; 3],
+    /// Per particle: below the plane (scratch).
+    below: Vec<bool>,
+    /// The particles' coordinates across the plane (scratch).
+    across: Vec<f32>,
+}
+
+/// Pairs from which the two parts of a pass run on two threads.
+const PARALLEL_MIN_PAIRS: usize = 4096;
+
+impl PassParts {
+    /// The parts of `pairs` of `triangles` at positions `x`, with lanes
+    /// for a CPU with AVX2 (`simd`).
+    fn update(&mut self, pairs: &[SelfPair], (triangles, x): (&[[u32; 3]], &[Vector]), simd: bool) {
+        let (mut lo, mut hi) = (Vector::INFINITY, Vector::NEG_INFINITY);
+        for p in x.iter().filter(|p| p.is_finite()) {
+            (lo, hi) = (lo.min(*p), hi.max(*p));
+        }
+        let extent = hi - lo;
+        let axis = if extent.x >= extent.y && extent.x >= extent.z {
+            0
+        } else if extent.y >= extent.z {
+            1
+        } else {
+            2
+        };
+        self.across.clear();
+        self.across.extend(x.iter().map(|p| p[axis]));
+        let median = if self.across.is_empty() {
+            0.0
+        } else {
+            let middle = self.across.len() / 2;
+            *self.across.select_nth_unstable_by(middle, f32::total_cmp).1
+        };
+        self.below.clear();
+        self.below.extend(x.iter().map(|p| p[axis] < median));
+        for part in &mut self.pairs {
+            part.clear();
+        }
+        let below = |i: u32| self.below.get(i as usize).copied();
+        for pair in pairs {
+            let corners = triangles.get(pair.triangle as usize).copied();
+            let sides = corners.map(|[a, b, c]| [pair.particle, a, b, c].map(below));
+            let part = match sides {
+                Some([Some(true), Some(true), Some(true), Some(true)]) => 0,
+                Some([Some(false), Some(false), Some(false), Some(false)]) => 1,
+                _ => 2,
+            };
+            self.pairs[part].push(*pair);
+        }
+        for (lanes, part) in self.lanes.iter_mut().zip(&self.pairs) {
+            lanes.update(part, (triangles, x.len()), simd);
+        }
+        for part in &mut self.pairs {
+            headroom(part);
+        }
+    }
+}
+
+/// A particle array as the parts of a pass share it
+/// ([`SelfContacts::resolve`]): each part reads and writes only particles
+/// no other part running at the same time touches.
+struct Points<'a> {
+    ptr: *mut Vector,
+    len: usize,
+    _array: std::marker::PhantomData<&'a mut [Vector]>,
+}
+
+impl<'a> Points<'a> {
+    /// The array `of`, for one part.
+    ///
+    /// # Safety
+    /// While this lives, no other user of the array touches a particle
+    /// this one does.
+    unsafe fn new(of: Disjoint<'a, Vector>) -> Points<'a> {
+        Points {
+            ptr: of.as_ptr(),
+            len: of.len(),
+            _array: std::marker::PhantomData,
+        }
+    }
+}
+
+impl std::ops::Index<usize> for Points<'_> {
+    type Output = Vector;
+    #[inline(always)]
+    fn index(&self, i: usize) -> &Vector {
+        assert!(i < self.len);
+        // SAFETY: in bounds; no other part touches particle `i` (`new`).
+        unsafe { &*self.ptr.add(i) }
+    }
+}
+
+impl std::ops::IndexMut<usize> for Points<'_> {
+    #[inline(always)]
+    fn index_mut(&mut self, i: usize) -> &mut Vector {
+        assert!(i < self.len);
+        // SAFETY: as for `index`.
+        unsafe { &mut *self.ptr.add(i) }
     }
 }
 
@@ -972,51 +1090,32 @@ impl SelfContacts {
         }
         headroom(&mut self.edge_pairs);
         let simd = simd_available() && !self.portable;
-        self.lanes.update(&self.pairs, (triangles, x.len()), simd);
+        self.parts.update(&self.pairs, (triangles, x), simd);
     }
 
-    /// One pass over the pairs (module docs); returns how many were
-    /// closer than the thickness.
+    /// One pass over the pairs (module docs), its two parts on the
+    /// `team` ([`PassParts`]); returns how many were closer than the
+    /// thickness.
     pub(crate) fn resolve(
         &self,
         particles: &mut Particles,
         topology: &Topology,
         params: &SelfContactParams,
+        team: Team,
     ) -> u32 {
         let Particles { x, v, inv_mass, .. } = particles;
         let thickness = params.thickness;
-        let mut touching = 0;
-        // The pairs come by triangle (a look's blocks join in triangle
-        // order): what depends on the triangle alone is found once for
-        // its run of pairs, and found again after any pair moved a
-        // particle (it may have moved a corner). The same values as a
-        // pair's own: the same expressions of the same positions.
-        let mut near: Option<Near> = None;
-        let pair_pass =
-            |pair: &SelfPair, near: &mut Option<Near>, x: &mut [Vector], v: &mut [Vector]| {
-                self.pair_pass(pair, near, (x, v, inv_mass), (topology, params))
+        let mut touching = {
+            let (xs, vs) = (Disjoint::new(&mut x[..]), Disjoint::new(&mut v[..]));
+            let part = |k: usize| {
+                // SAFETY: parts 0 and 1 share no particle, and part 2 runs
+                // after both.
+                let (mut x, mut v) = unsafe { (Points::new(xs), Points::new(vs)) };
+                self.part_pass(k, (&mut x, &mut v, inv_mass), (topology, params))
             };
-        let n = self.pairs.len();
-        if self.lanes.usable(n, x.len()) {
-            // Eight pairs at a time: a vector test finds the first that is
-            // not surely apart; those before it would change nothing and
-            // are passed over, and from it to the eighth each takes the
-            // pass one at a time (from positions the pairs before moved):
-            // the bits of the pass one pair at a time.
-            for k in (0..n).step_by(LANES) {
-                let first = self.lanes.first_not_apart(k, x, (thickness, self.margin));
-                if first < LANES {
-                    near = None;
-                    for pair in &self.pairs[k + first..(k + LANES).min(n)] {
-                        touching += pair_pass(pair, &mut near, x, v);
-                    }
-                }
-            }
-        } else {
-            for pair in &self.pairs {
-                touching += pair_pass(pair, &mut near, x, v);
-            }
-        }
+            let team = team.for_work(self.pairs.len(), PARALLEL_MIN_PAIRS);
+            team.sum_count(2, part) + part(2)
+        };
         for pair in &self.edge_pairs {
             let ([ia, ib], [ip, iq]) = (
                 pair.border.map(|i| i as usize),
@@ -1056,6 +1155,48 @@ impl SelfContacts {
         touching
     }
 
+    /// The pass over part `k` of the pairs ([`PassParts`]); returns how
+    /// many were closer than the thickness.
+    fn part_pass(
+        &self,
+        k: usize,
+        (x, v, inv_mass): (&mut Points, &mut Points, &[f32]),
+        (topology, params): (&Topology, &SelfContactParams),
+    ) -> u32 {
+        let (pairs, lanes) = (&self.parts.pairs[k], &self.parts.lanes[k]);
+        let mut touching = 0;
+        // The pairs come by triangle (a look's blocks join in triangle
+        // order): what depends on the triangle alone is found once for
+        // its run of pairs, and found again after any pair moved a
+        // particle (it may have moved a corner). The same values as a
+        // pair's own: the same expressions of the same positions.
+        let mut near: Option<Near> = None;
+        let n = pairs.len();
+        let layers = (params.thickness, self.margin);
+        if lanes.usable(n, x.len) {
+            // Eight pairs at a time: a vector test finds the first that is
+            // not surely apart; those before it would change nothing and
+            // are passed over, and from it to the eighth each takes the
+            // pass one at a time (from positions the pairs before moved):
+            // the bits of the pass one pair at a time.
+            for k in (0..n).step_by(LANES) {
+                let first = lanes.first_not_apart(k, x, layers);
+                if first < LANES {
+                    near = None;
+                    for pair in &pairs[k + first..(k + LANES).min(n)] {
+                        touching +=
+                            self.pair_pass(pair, &mut near, (x, v, inv_mass), (topology, params));
+                    }
+                }
+            }
+        } else {
+            for pair in pairs {
+                touching += self.pair_pass(pair, &mut near, (x, v, inv_mass), (topology, params));
+            }
+        }
+        touching
+    }
+
     /// The pass of one pair (module docs), with the triangle's values of
     /// `near` when it is that pair's triangle (else found again there);
     /// returns 1 when the pair was closer than the thickness, else 0.
@@ -1064,7 +1205,7 @@ impl SelfContacts {
         &self,
         pair: &SelfPair,
         near: &mut Option<Near>,
-        (x, v, inv_mass): (&mut [Vector], &mut [Vector], &[f32]),
+        (x, v, inv_mass): (&mut Points, &mut Points, &[f32]),
         (topology, params): (&Topology, &SelfContactParams),
     ) -> u32 {
         let SelfContactParams {
@@ -1173,7 +1314,7 @@ struct Near {
 impl Near {
     /// Triangle `t` with corners `tri` at positions `x`.
     #[inline]
-    fn of(t: u32, tri: [u32; 3], x: &[Vector]) -> Near {
+    fn of(t: u32, tri: [u32; 3], x: &impl std::ops::Index<usize, Output = Vector>) -> Near {
         let tri = tri.map(|i| i as usize);
         let [a, b, c] = tri.map(|i| x[i]);
         let (e1, e2) = (b - a, c - a);
@@ -1381,18 +1522,18 @@ mod tests {
         assert_eq!(fresh.edge_pairs, contacts.edge_pairs);
     }
 
-    /// Three 12 × 12 sheets joined, crumpled and laid 4 mm apart, 5 mm
+    /// Three 14 × 14 sheets joined, crumpled and laid 4 mm apart, 5 mm
     /// layers: pairs within reach everywhere, some closer than the
     /// thickness.
     fn crumpled_layers() -> (crate::cloth::Cloth, Vec<Vector>) {
-        let sheet = ClothBuilder::new(12, 12).size(0.3, 0.3).build().unwrap();
+        let sheet = ClothBuilder::new(14, 14).size(0.35, 0.35).build().unwrap();
         let cloth = crate::cloth::Cloth::join(vec![sheet; 3]).unwrap();
         let x = cloth
             .positions()
             .iter()
             .enumerate()
             .map(|(i, &p)| {
-                let layer = (i / 144) as f32;
+                let layer = (i / (14 * 14)) as f32;
                 let bump = 0.004 * ((p.x * 23.0).sin() + (p.z * 17.0 + layer).cos());
                 Vector::new(p.x + 0.003 * layer, 0.004 * layer + bump, p.z)
             })
@@ -1449,7 +1590,8 @@ mod tests {
 
     /// The pass eight pairs at a time (a vector test passing over the
     /// idle ones) gives the bits of the pass one pair at a time, pass
-    /// after pass, and as many pairs closer than the thickness.
+    /// after pass, and as many pairs closer than the thickness; its two
+    /// parts on two threads too.
     #[test]
     fn the_pass_by_eights_gives_the_bits_of_one_pair_at_a_time() {
         let (cloth, x) = crumpled_layers();
@@ -1474,22 +1616,40 @@ mod tests {
             let mut look = None;
             contacts.begin_step(&mut look, &basis, Team::ALONE);
             contacts.find(&mut look, &x, &basis, Team::ALONE);
-            assert_eq!(
-                contacts.lanes.usable(contacts.pairs.len(), x.len()),
-                !portable && simd_available()
+            let parts = &contacts.parts;
+            let usable = (0..3).all(|k| parts.lanes[k].usable(parts.pairs[k].len(), x.len()));
+            assert_eq!(usable, !portable && simd_available());
+            // Two parts apart, a few pairs across.
+            let sizes = parts.pairs.each_ref().map(Vec::len);
+            assert!(
+                sizes[0] > 500 && sizes[1] > 500 && sizes[2] < sizes[0],
+                "{sizes:?}"
             );
             let mut particles = cloth.particles.clone();
             particles.x.copy_from_slice(&x);
             for (i, v) in particles.v.iter_mut().enumerate() {
                 *v = Vector::new(0.0, -0.3 * ((i % 7) as f32 - 3.0), 0.1);
             }
-            let touching: Vec<u32> = (0..4)
-                .map(|_| contacts.resolve(&mut particles, topology, &params))
-                .collect();
             let bits = |v: &[Vector]| -> Vec<[u32; 3]> {
                 v.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
             };
-            (touching, bits(&particles.x), bits(&particles.v))
+            let pass = |team: Team| {
+                let mut particles = particles.clone();
+                let touching: Vec<u32> = (0..4)
+                    .map(|_| contacts.resolve(&mut particles, topology, &params, team))
+                    .collect();
+                (touching, bits(&particles.x), bits(&particles.v))
+            };
+            let alone = pass(Team::ALONE);
+            assert!(
+                contacts.pairs.len() >= PARALLEL_MIN_PAIRS,
+                "{} pairs",
+                contacts.pairs.len()
+            );
+            // The two parts on two threads: the same bits.
+            #[cfg(feature = "parallel")]
+            assert_eq!(crate::parallel::on_threads(2, pass), alone);
+            alone
         };
         let (batched, one) = (run(false), run(true));
         assert!(one.0[0] > 50, "only {:?} pairs touching", one.0);

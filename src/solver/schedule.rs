@@ -359,6 +359,7 @@ impl ClothSolver {
                         friction: cloth.params.self_friction,
                         h,
                     },
+                    team,
                 );
                 report.self_contacts += self_touching;
                 watch.lap(&mut times.self_collision);
