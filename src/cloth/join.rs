@@ -21,7 +21,9 @@ impl Cloth {
     ///
     /// Every piece must have the first piece's material (one cloth has one
     /// material); a joined cloth is no grid ([`Cloth::grid`] is `None`),
-    /// though its pieces may be ([`Topology::grid_pieces`]).
+    /// though its pieces may be ([`Topology::grid_pieces`]), and pieces of
+    /// one grid shape are swept as one grid of their rows stacked
+    /// ([`Topology::lane_grid`]).
     pub fn join(pieces: Vec<Cloth>) -> Result<Cloth, ClothError> {
         let mut pieces = pieces.into_iter();
         let Some(first) = pieces.next() else {
