@@ -29,7 +29,7 @@
 //! tested against each triangle eight at a time where the CPU has AVX2.
 //!
 //! A substep's pass, in pair order (Gauss–Seidel) within each of three
-//! parts ([`PassParts`]): the pairs below a plane across the cloth and
+//! parts ([`PassPlane`]): the pairs below a plane across the cloth and
 //! those above it on two threads at once, then those across it (the same
 //! bits on any number of threads). Where the CPU has AVX2 a vector test
 //! of eight pairs at a time passes over those the pass would leave as
@@ -106,7 +106,9 @@ pub struct SelfContacts {
     /// Per block of border edges: the edge pairs it found at the last look.
     border_blocks: Vec<EdgeList>,
     neighbours: MeshNeighbours,
-    pairs: Vec<SelfPair>,
+    /// The blocks of triangles the last look used, and the pairs they found.
+    used_blocks: usize,
+    pairs: usize,
     /// Border edges near other edges, found by the last look.
     edge_pairs: Vec<EdgePair>,
     /// Which look the pairs are of ([`SelfLook::number`]) and the cloth's
@@ -114,9 +116,8 @@ pub struct SelfContacts {
     pairs_of: Option<(u64, u64)>,
     /// How far (m) particles may close in on each other between looks.
     margin: f32,
-    /// The pairs in parts for a pass on two threads, and by lanes for
-    /// its vector test.
-    parts: PassParts,
+    /// The plane that parts the pairs for a pass on two threads.
+    plane: PassPlane,
     /// Look and pass without AVX2 even where the CPU has it (the tests'
     /// reference).
     portable: bool,
@@ -133,55 +134,59 @@ struct PairLanes {
     /// Pairs, before the padding; the particles their indices are below.
     len: usize,
     particles: usize,
+    /// A pair had an index out of range, or no triangle: not to be used.
+    broken: bool,
     p: Vec<i32>,
     corners: [Vec<i32>; 3],
     side: Vec<f32>,
 }
 
 impl PairLanes {
-    /// The lanes of `pairs` of `triangles` on `particles` particles, for
-    /// a CPU with AVX2 (`simd`); left empty without, or if an index is
-    /// out of range.
-    fn update(
-        &mut self,
-        pairs: &[SelfPair],
-        (triangles, particles): (&[[u32; 3]], usize),
-        simd: bool,
-    ) {
+    /// Empties the lanes, for pairs on `particles` particles, to be used
+    /// on a CPU with AVX2 (`simd`).
+    fn clear(&mut self, simd: bool, particles: usize) {
         self.simd = simd;
         self.len = 0;
         self.particles = particles;
+        self.broken = false;
         self.p.clear();
         self.corners.iter_mut().for_each(Vec::clear);
         self.side.clear();
+    }
+
+    /// Adds `pair`, of the triangle with `corners` (none: no triangle,
+    /// and the lanes are not to be used); nothing without AVX2.
+    fn push(&mut self, pair: &SelfPair, corners: Option<[u32; 3]>) {
         if !self.simd {
             return;
         }
+        let particles = self.particles;
         let fits = |i: u32| (i as usize) < particles && i <= i32::MAX as u32;
-        for pair in pairs {
-            let Some(&tri) = triangles.get(pair.triangle as usize) else {
-                return;
-            };
-            if !fits(pair.particle) || !tri.into_iter().all(fits) {
-                return;
+        match corners {
+            Some(tri) if fits(pair.particle) && tri.into_iter().all(fits) => {
+                self.p.push(pair.particle as i32);
+                for (corners, c) in self.corners.iter_mut().zip(tri) {
+                    corners.push(c as i32);
+                }
+                self.side.push(pair.side);
+                self.len += 1;
             }
-            self.p.push(pair.particle as i32);
-            for (corners, c) in self.corners.iter_mut().zip(tri) {
-                corners.push(c as i32);
-            }
-            self.side.push(pair.side);
+            _ => self.broken = true,
         }
-        let padded = pairs.len().next_multiple_of(LANES);
+    }
+
+    /// Pads the lanes to whole vector steps.
+    fn pad(&mut self) {
+        let padded = self.len.next_multiple_of(LANES);
         self.p.resize(padded, 0);
         self.corners.iter_mut().for_each(|c| c.resize(padded, 0));
         self.side.resize(padded, 0.0);
-        self.len = pairs.len();
     }
 
     /// True when the lanes hold `pairs` pairs on `particles` particles and
     /// the CPU has AVX2.
     fn usable(&self, pairs: usize, particles: usize) -> bool {
-        self.simd && self.len == pairs && self.particles == particles && pairs > 0
+        self.simd && !self.broken && self.len == pairs && self.particles == particles && pairs > 0
     }
 
     /// The first of the eight pairs from `k` that is not surely further
@@ -324,18 +329,17 @@ impl PairLanes {
     }
 }
 
-/// A look's pairs in three parts ([`SelfContacts::resolve`]): those whose
-/// particles (the pair's own and its triangle's corners) all lay below a
-/// plane across the cloth at the look, those whose all lay above it, and
-/// the rest. The first two share no particle, so that a pass may take
-/// them on two threads at once, then the rest: the same bits on one
-/// thread or two. The plane is across the widest side of the particles'
-/// box, through their median.
+/// How a look's pairs are parted for the pass ([`SelfContacts::resolve`]):
+/// those whose particles (the pair's own and its triangle's corners) all
+/// lay below a plane across the cloth at the look, those whose all lay
+/// above it, and the rest. The first two share no particle, so that a
+/// pass may take them on two threads at once, then the rest: the same
+/// bits on one thread or two. The plane is across the widest side of the
+/// particles' box, through their median. Each block of triangles parts
+/// its own pairs, on its thread.
 #[derive(Debug, Default, Clone)]
-struct PassParts {
-    pairs: [Vec<SelfPair>; 3],
-    lanes: [PairLanes; 3],
-    /// Per particle: below the plane (scratch).
+struct PassPlane {
+    /// Per particle: below the plane.
     below: Vec<bool>,
     /// The particles' coordinates across the plane (scratch).
     across: Vec<f32>,
@@ -344,10 +348,9 @@ struct PassParts {
 /// Pairs from which the two parts of a pass run on two threads.
 const PARALLEL_MIN_PAIRS: usize = 4096;
 
-impl PassParts {
-    /// The parts of `pairs` of `triangles` at positions `x`, with lanes
-    /// for a CPU with AVX2 (`simd`).
-    fn update(&mut self, pairs: &[SelfPair], (triangles, x): (&[[u32; 3]], &[Vector]), simd: bool) {
+impl PassPlane {
+    /// The plane through the median of positions `x`.
+    fn update(&mut self, x: &[Vector]) {
         let (mut lo, mut hi) = (Vector::INFINITY, Vector::NEG_INFINITY);
         for p in x.iter().filter(|p| p.is_finite()) {
             (lo, hi) = (lo.min(*p), hi.max(*p));
@@ -370,25 +373,36 @@ impl PassParts {
         };
         self.below.clear();
         self.below.extend(x.iter().map(|p| p[axis] < median));
-        for part in &mut self.pairs {
-            part.clear();
+    }
+
+    /// Parts `pairs` of `triangles` into `parts`, with lanes for a CPU
+    /// with AVX2 (`simd`) on `particles` particles.
+    fn part(
+        &self,
+        pairs: &[SelfPair],
+        (triangles, particles): (&[[u32; 3]], usize),
+        simd: bool,
+        parts: &mut [PartPairs; 3],
+    ) {
+        for part in parts.iter_mut() {
+            part.pairs.clear();
+            part.lanes.clear(simd, particles);
         }
         let below = |i: u32| self.below.get(i as usize).copied();
         for pair in pairs {
             let corners = triangles.get(pair.triangle as usize).copied();
             let sides = corners.map(|[a, b, c]| [pair.particle, a, b, c].map(below));
-            let part = match sides {
+            let k = match sides {
                 Some([Some(true), Some(true), Some(true), Some(true)]) => 0,
                 Some([Some(false), Some(false), Some(false), Some(false)]) => 1,
                 _ => 2,
             };
-            self.pairs[part].push(*pair);
+            parts[k].pairs.push(*pair);
+            parts[k].lanes.push(pair, corners);
         }
-        for (lanes, part) in self.lanes.iter_mut().zip(&self.pairs) {
-            lanes.update(part, (triangles, x.len()), simd);
-        }
-        for part in &mut self.pairs {
-            headroom(part);
+        for part in parts.iter_mut() {
+            part.lanes.pad();
+            headroom(&mut part.pairs);
         }
     }
 }
@@ -449,11 +463,19 @@ const BORDER_BLOCK: usize = 64;
 struct EdgeList(Vec<EdgePair>);
 
 /// The pairs a block of triangles found, alone on its cache lines (blocks
-/// on different threads push at once), and the candidates of its runs of
-/// triangles ([`Look::run`]).
+/// on different threads push at once), in triangle order; the candidates
+/// of its runs of triangles ([`Look::run`]); and its pairs in the pass's
+/// three parts ([`PassPlane`]), with their lanes.
 #[derive(Debug, Default, Clone)]
 #[repr(align(128))]
-struct PairList(Vec<SelfPair>, Candidates);
+struct PairList(Vec<SelfPair>, Candidates, [PartPairs; 3]);
+
+/// The pairs of one block in one part of the pass, and their lanes.
+#[derive(Debug, Default, Clone)]
+struct PartPairs {
+    pairs: Vec<SelfPair>,
+    lanes: PairLanes,
+}
 
 /// Triangles a look takes together ([`Look::run`]): one scan of the hash
 /// over the box around them all, one sort of what it found.
@@ -1013,19 +1035,20 @@ impl SelfContacts {
     /// their pairs then joined in triangle order (the same list on any
     /// number of threads).
     fn find_pairs(&mut self, x: &[Vector], topology: &Topology, thickness: f32, team: Team) {
-        self.pairs.clear();
+        (self.pairs, self.used_blocks) = (0, 0);
         self.edge_pairs.clear();
         let triangles = &topology.triangles;
         if triangles.is_empty() {
             return;
         }
+        let simd = simd_available() && !self.portable;
         let look = Look {
             x,
             topology,
             thickness,
             reach: thickness + self.margin,
             margin: self.margin,
-            simd: simd_available() && !self.portable,
+            simd,
         };
         // Cells about twice a triangle's width or the reach: a triangle's
         // box meets a few (drape N = 64: 8% faster a frame than cells of
@@ -1045,12 +1068,14 @@ impl SelfContacts {
             self.border_blocks
                 .resize_with(border_blocks, EdgeList::default);
         }
+        self.plane.update(x);
         let (hash, neighbours, patches) = (&self.hash, &self.neighbours, &self.patches);
+        let plane = &self.plane;
         let lists = Disjoint::new(&mut self.blocks[..blocks]);
         let edge_lists = Disjoint::new(&mut self.border_blocks[..border_blocks]);
         // The triangles' blocks, then the border edges' (serial, they
         // were a tenth of the `fold`'s frame), in one handout.
-        team.sum_count_uneven(blocks + border_blocks, |k| {
+        let found = team.sum_count_uneven(blocks + border_blocks, |k| {
             if k >= blocks {
                 let e = k - blocks;
                 // SAFETY: block `e` alone uses edge list `e`.
@@ -1065,7 +1090,7 @@ impl SelfContacts {
                 return 0;
             }
             // SAFETY: block `k` alone uses list `k`.
-            let PairList(list, candidates) = unsafe { &mut lists.range(k..k + 1)[0] };
+            let PairList(list, candidates, parts) = unsafe { &mut lists.range(k..k + 1)[0] };
             list.clear();
             let end = ((k + 1) * TRIANGLE_BLOCK).min(triangles.len());
             // A run at a time: a grid's triangles of a few cells along a
@@ -1076,25 +1101,29 @@ impl SelfContacts {
                 let quiet = |t| patches.quiet_triangle(t);
                 look.run(run, quiet, (hash, neighbours), candidates, list);
             }
-            0
-        });
-        for list in &mut self.blocks[..blocks] {
-            self.pairs.extend_from_slice(&list.0);
-            headroom(&mut list.0);
-        }
-        headroom(&mut self.pairs);
+            // The block's pairs in the pass's parts, on its own thread.
+            plane.part(list, (triangles, x.len()), simd, parts);
+            headroom(list);
+            list.len() as u32
+        }) as usize;
+        (self.pairs, self.used_blocks) = (found, blocks);
         self.edge_pairs.clear();
         for list in &mut self.border_blocks[..border_blocks] {
             self.edge_pairs.extend_from_slice(&list.0);
             headroom(&mut list.0);
         }
         headroom(&mut self.edge_pairs);
-        let simd = simd_available() && !self.portable;
-        self.parts.update(&self.pairs, (triangles, x), simd);
+    }
+
+    /// The pairs of the last look's blocks, in the pass's `part`.
+    fn part_blocks(&self, part: usize) -> impl Iterator<Item = &PartPairs> + '_ {
+        self.blocks[..self.used_blocks]
+            .iter()
+            .map(move |b| &b.2[part])
     }
 
     /// One pass over the pairs (module docs), its two parts on the
-    /// `team` ([`PassParts`]); returns how many were closer than the
+    /// `team` ([`PassPlane`]); returns how many were closer than the
     /// thickness.
     pub(crate) fn resolve(
         &self,
@@ -1113,7 +1142,7 @@ impl SelfContacts {
                 let (mut x, mut v) = unsafe { (Points::new(xs), Points::new(vs)) };
                 self.part_pass(k, (&mut x, &mut v, inv_mass), (topology, params))
             };
-            let team = team.for_work(self.pairs.len(), PARALLEL_MIN_PAIRS);
+            let team = team.for_work(self.pairs, PARALLEL_MIN_PAIRS);
             team.sum_count(2, part) + part(2)
         };
         for pair in &self.edge_pairs {
@@ -1155,7 +1184,7 @@ impl SelfContacts {
         touching
     }
 
-    /// The pass over part `k` of the pairs ([`PassParts`]); returns how
+    /// The pass over part `k` of the pairs ([`PassPlane`]); returns how
     /// many were closer than the thickness.
     fn part_pass(
         &self,
@@ -1163,7 +1192,20 @@ impl SelfContacts {
         (x, v, inv_mass): (&mut Points, &mut Points, &[f32]),
         (topology, params): (&Topology, &SelfContactParams),
     ) -> u32 {
-        let (pairs, lanes) = (&self.parts.pairs[k], &self.parts.lanes[k]);
+        self.part_blocks(k)
+            .map(|part| self.block_pass(part, (x, v, inv_mass), (topology, params)))
+            .sum()
+    }
+
+    /// The pass over one block's pairs of a part; returns how many were
+    /// closer than the thickness.
+    fn block_pass(
+        &self,
+        part: &PartPairs,
+        (x, v, inv_mass): (&mut Points, &mut Points, &[f32]),
+        (topology, params): (&Topology, &SelfContactParams),
+    ) -> u32 {
+        let (pairs, lanes) = (&part.pairs, &part.lanes);
         let mut touching = 0;
         // The pairs come by triangle (a look's blocks join in triangle
         // order): what depends on the triangle alone is found once for
@@ -1424,6 +1466,16 @@ mod tests {
     use super::*;
     use crate::cloth::ClothBuilder;
 
+    impl SelfContacts {
+        /// Every pair of the last look, in triangle order.
+        fn all_pairs(&self) -> Vec<SelfPair> {
+            let blocks = &self.blocks[..self.used_blocks];
+            let pairs: Vec<SelfPair> = blocks.iter().flat_map(|b| b.0.clone()).collect();
+            assert_eq!(pairs.len(), self.pairs);
+            pairs
+        }
+    }
+
     #[test]
     fn a_look_is_due_once_two_particles_may_have_closed_in_by_the_margin() {
         let cloth = ClothBuilder::new(4, 4).build().unwrap();
@@ -1515,10 +1567,13 @@ mod tests {
         let (mut contacts, mut look) = (SelfContacts::default(), None);
         contacts.begin_step(&mut look, &basis, Team::ALONE);
         contacts.find(&mut look, &folded, &basis, Team::ALONE);
-        assert!(!contacts.pairs.is_empty(), "the halves are within reach");
+        assert!(
+            !contacts.all_pairs().is_empty(),
+            "the halves are within reach"
+        );
         let mut fresh = SelfContacts::default();
         fresh.begin_step(&mut look, &basis, Team::ALONE);
-        assert_eq!(fresh.pairs, contacts.pairs);
+        assert_eq!(fresh.all_pairs(), contacts.all_pairs());
         assert_eq!(fresh.edge_pairs, contacts.edge_pairs);
     }
 
@@ -1584,7 +1639,7 @@ mod tests {
                 }
             }
             assert!(want.len() > 1000, "only {} pairs", want.len());
-            assert_eq!(contacts.pairs, want, "portable: {portable}");
+            assert_eq!(contacts.all_pairs(), want, "portable: {portable}");
         }
     }
 
@@ -1616,15 +1671,23 @@ mod tests {
             let mut look = None;
             contacts.begin_step(&mut look, &basis, Team::ALONE);
             contacts.find(&mut look, &x, &basis, Team::ALONE);
-            let parts = &contacts.parts;
-            let usable = (0..3).all(|k| parts.lanes[k].usable(parts.pairs[k].len(), x.len()));
+            let parts: Vec<Vec<&PartPairs>> =
+                (0..3).map(|k| contacts.part_blocks(k).collect()).collect();
+            let usable = parts
+                .iter()
+                .flatten()
+                .all(|p| p.pairs.is_empty() || p.lanes.usable(p.pairs.len(), x.len()));
             assert_eq!(usable, !portable && simd_available());
-            // Two parts apart, a few pairs across.
-            let sizes = parts.pairs.each_ref().map(Vec::len);
+            // Two parts apart, a few pairs across; every pair in one.
+            let sizes: Vec<usize> = parts
+                .iter()
+                .map(|part| part.iter().map(|p| p.pairs.len()).sum())
+                .collect();
             assert!(
                 sizes[0] > 500 && sizes[1] > 500 && sizes[2] < sizes[0],
                 "{sizes:?}"
             );
+            assert_eq!(sizes.iter().sum::<usize>(), contacts.pairs);
             let mut particles = cloth.particles.clone();
             particles.x.copy_from_slice(&x);
             for (i, v) in particles.v.iter_mut().enumerate() {
@@ -1642,9 +1705,9 @@ mod tests {
             };
             let alone = pass(Team::ALONE);
             assert!(
-                contacts.pairs.len() >= PARALLEL_MIN_PAIRS,
+                contacts.pairs >= PARALLEL_MIN_PAIRS,
                 "{} pairs",
-                contacts.pairs.len()
+                contacts.pairs
             );
             // The two parts on two threads: the same bits.
             #[cfg(feature = "parallel")]
