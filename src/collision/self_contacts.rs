@@ -1596,6 +1596,29 @@ mod tests {
         (cloth, x)
     }
 
+    /// The layers' thickness and the margin of [`looked_at`] (m).
+    const LAYERS: f32 = 0.005;
+
+    /// Self-collision of `cloth` after a look at `x` (with the AVX2
+    /// kernels unless `portable`).
+    fn looked_at(cloth: &crate::cloth::Cloth, x: &[Vector], portable: bool) -> SelfContacts {
+        let basis = LookBasis {
+            topology: &cloth.topology,
+            particles: x.len(),
+            revision: cloth.mass_revision,
+            thickness: LAYERS,
+            margin: LAYERS,
+        };
+        let mut contacts = SelfContacts {
+            portable,
+            ..SelfContacts::default()
+        };
+        let mut look = None;
+        contacts.begin_step(&mut look, &basis, Team::ALONE);
+        contacts.find(&mut look, x, &basis, Team::ALONE);
+        contacts
+    }
+
     /// A look by runs of triangles, with its vector test and without,
     /// finds the pairs of each triangle tested against every particle in
     /// turn (the look's definition: inside the triangle's box, and a
@@ -1604,26 +1627,13 @@ mod tests {
     fn a_look_by_runs_finds_the_pairs_of_every_particle_against_every_triangle() {
         let (cloth, x) = crumpled_layers();
         let topology = &*cloth.topology;
-        let basis = LookBasis {
-            topology,
-            particles: x.len(),
-            revision: cloth.mass_revision,
-            thickness: 0.005,
-            margin: 0.005,
-        };
         for portable in [false, true] {
-            let mut contacts = SelfContacts {
-                portable,
-                ..SelfContacts::default()
-            };
-            let mut look = None;
-            contacts.begin_step(&mut look, &basis, Team::ALONE);
-            contacts.find(&mut look, &x, &basis, Team::ALONE);
+            let contacts = looked_at(&cloth, &x, portable);
             let reference = Look {
                 x: &x,
                 topology,
-                thickness: basis.thickness,
-                reach: basis.thickness + contacts.margin,
+                thickness: LAYERS,
+                reach: LAYERS + contacts.margin,
                 margin: contacts.margin,
                 simd: false,
             };
@@ -1651,26 +1661,13 @@ mod tests {
     fn the_pass_by_eights_gives_the_bits_of_one_pair_at_a_time() {
         let (cloth, x) = crumpled_layers();
         let topology = &*cloth.topology;
-        let basis = LookBasis {
-            topology,
-            particles: x.len(),
-            revision: cloth.mass_revision,
-            thickness: 0.005,
-            margin: 0.005,
-        };
         let params = SelfContactParams {
-            thickness: basis.thickness,
+            thickness: LAYERS,
             friction: 0.3,
             h: 1.0e-3,
         };
         let run = |portable: bool| {
-            let mut contacts = SelfContacts {
-                portable,
-                ..SelfContacts::default()
-            };
-            let mut look = None;
-            contacts.begin_step(&mut look, &basis, Team::ALONE);
-            contacts.find(&mut look, &x, &basis, Team::ALONE);
+            let contacts = looked_at(&cloth, &x, portable);
             let parts: Vec<Vec<&PartPairs>> =
                 (0..3).map(|k| contacts.part_blocks(k).collect()).collect();
             let usable = parts
