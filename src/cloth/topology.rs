@@ -158,6 +158,7 @@ impl Topology {
                 && Some(piece.first_triangle) == k.checked_mul(triangles)
         });
         let rows = first.rows.checked_mul(self.pieces.len())?;
+        // Every particle (one texture coordinate each) and triangle in a piece.
         let whole = Some(self.uvs.len()) == rows.checked_mul(first.cols)
             && Some(self.triangles.len()) == triangles.checked_mul(self.pieces.len());
         (stacked && whole).then_some(LaneGrid {

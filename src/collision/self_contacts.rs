@@ -161,7 +161,9 @@ impl PairLanes {
             return;
         }
         let particles = self.particles;
-        let fits = |i: u32| (i as usize) < particles && i <= i32::MAX as u32;
+        // Within the particles, and a gather's offset (4 floats a
+        // particle at most) within an `i32`.
+        let fits = |i: u32| (i as usize) < particles && i <= i32::MAX as u32 / 4;
         match corners {
             Some(tri) if fits(pair.particle) && tri.into_iter().all(fits) => {
                 self.p.push(pair.particle as i32);

@@ -276,6 +276,7 @@ impl ClothSolver {
         let mut watch = Lap::start();
         // Stages after the integrator that move the particles.
         let moved_after = cloth.params.self_collision || cloth.params.tethers;
+        let grid = cloth.topology.lane_grid();
         for substep in 0..k {
             let ctx = StepContext {
                 dt,
@@ -322,7 +323,7 @@ impl ClothSolver {
                 settings: &self.settings,
                 obstacles,
                 mass_revision: cloth.mass_revision,
-                grid: cloth.topology.lane_grid(),
+                grid,
                 team,
                 moved_after,
                 edges_near,
