@@ -191,23 +191,23 @@ impl PairLanes {
         self.simd && !self.broken && self.len == pairs && self.particles == particles && pairs > 0
     }
 
-    /// The first of the eight pairs from `k` that is not surely further
-    /// apart than the thickness (`t2`, m², squared) on its side at
-    /// positions `x`, by [`SelfContacts::pair_pass`]'s first test made a
-    /// hair stricter; [`LANES`] when none is.
-    fn first_not_apart(&self, k: usize, x: &Points, layers: (f32, f32)) -> usize {
+    /// The first of the eight pairs from `k` that the pass may act on at
+    /// positions `x`, for layers `(thickness, margin)` (m): not idle by
+    /// [`SelfContacts::pair_pass`]'s tests up to the barycentrics, each
+    /// made a hair looser; [`LANES`] when all are idle.
+    fn first_busy(&self, k: usize, x: &Points, layers: (f32, f32)) -> usize {
         #[cfg(target_arch = "x86_64")]
         if self.usable(self.len, x.len) && k < self.len {
             // SAFETY: usable only with AVX2, with every index below
             // `x.len`, and `k` a pair's; the pairs' particles are this
             // part's.
-            return unsafe { self.first_not_apart_avx2(k, x, layers) };
+            return unsafe { self.first_busy_avx2(k, x, layers) };
         }
         let _ = (k, x, layers);
         0
     }
 
-    /// [`Self::first_not_apart`] in AVX2.
+    /// [`Self::first_busy`] in AVX2.
     ///
     /// # Safety
     /// The CPU has AVX2; the lanes' indices are below `x.len`; `k` is
@@ -215,7 +215,7 @@ impl PairLanes {
     /// pairs meanwhile.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn first_not_apart_avx2(
+    unsafe fn first_busy_avx2(
         &self,
         k: usize,
         x: &Points,
@@ -480,7 +480,7 @@ struct PartPairs {
 }
 
 /// Triangles a look takes together ([`Look::run`]): one scan of the hash
-/// over the box around them all, one sort of what it found.
+/// over the box around them all.
 const RUN: usize = 8;
 
 /// The particles within the box around a run of triangles, in the hash's
@@ -1209,22 +1209,22 @@ impl SelfContacts {
     ) -> u32 {
         let (pairs, lanes) = (&part.pairs, &part.lanes);
         let mut touching = 0;
-        // The pairs come by triangle (a look's blocks join in triangle
-        // order): what depends on the triangle alone is found once for
-        // its run of pairs, and found again after any pair moved a
-        // particle (it may have moved a corner). The same values as a
-        // pair's own: the same expressions of the same positions.
+        // The pairs come by triangle (a block's, in triangle order): what
+        // depends on the triangle alone is found once for its run of
+        // pairs, and found again after any pair moved a particle (it may
+        // have moved a corner). The same values as a pair's own: the same
+        // expressions of the same positions.
         let mut near: Option<Near> = None;
         let n = pairs.len();
         let layers = (params.thickness, self.margin);
         if lanes.usable(n, x.len) {
-            // Eight pairs at a time: a vector test finds the first that is
-            // not surely apart; those before it would change nothing and
+            // Eight pairs at a time: a vector test finds the first the
+            // pass may act on; those before it would change nothing and
             // are passed over, and from it to the eighth each takes the
             // pass one at a time (from positions the pairs before moved):
             // the bits of the pass one pair at a time.
             for k in (0..n).step_by(LANES) {
-                let first = lanes.first_not_apart(k, x, layers);
+                let first = lanes.first_busy(k, x, layers);
                 if first < LANES {
                     near = None;
                     for pair in &pairs[k + first..(k + LANES).min(n)] {
