@@ -119,10 +119,13 @@ impl ClothSolver {
         // The team spans the step, its backups and its divergence check
         // too (on one thread they were a sixteenth of the drape's frame at
         // N = 128 on two).
-        let threads = self.settings.parallel && shares_well(cloth, integrator);
-        with_team(threads, |team| {
+        let busy = edges_near || self.workspace.touched_last_step;
+        let threads = self.settings.parallel && shares_well(cloth, integrator, busy);
+        let report = with_team(threads, |team| {
             self.step_with_team(cloth, obstacles, (dt, k, edges_near), team, started)
-        })
+        })?;
+        self.workspace.touched_last_step = report.contacts > 0;
+        Ok(report)
     }
 
     /// [`Self::step`] from its backups on, its loops shared by the `team`.
@@ -494,11 +497,18 @@ const TEAM_MIN_PARTICLES: usize = 2048;
 /// 31 → 34 ms a frame with two threads, its serial sweep the slower).
 ///
 /// A grid cloth without self-collision shares the small-steps solver's
-/// step from [`XPBD_TEAM_MIN_PARTICLES`] particles.
-fn shares_well(cloth: &Cloth, integrator: Integrator) -> bool {
+/// step from [`XPBD_TEAM_MIN_PARTICLES`] particles, or from
+/// [`XPBD_BUSY_TEAM_MIN_PARTICLES`] in a `busy` step (one near an
+/// obstacle's edges, or after a step that touched an obstacle).
+fn shares_well(cloth: &Cloth, integrator: Integrator, busy: bool) -> bool {
     let n = cloth.particle_count();
     if integrator == Integrator::Xpbd && !cloth.params.self_collision {
-        return cloth.topology().lane_grid().is_some() && n >= XPBD_TEAM_MIN_PARTICLES;
+        let least = if busy {
+            XPBD_BUSY_TEAM_MIN_PARTICLES
+        } else {
+            XPBD_TEAM_MIN_PARTICLES
+        };
+        return cloth.topology().lane_grid().is_some() && n >= least;
     }
     n >= TEAM_MIN_PARTICLES
 }
@@ -516,6 +526,22 @@ fn shares_well(cloth: &Cloth, integrator: Integrator) -> bool {
 /// 2048 particles): N = 64 0.88 / 0.90–1.11, 80 1.46 / 1.41–1.42, 96
 /// 2.13 / 1.75–1.98: from 8192 (N = 91 up), was 10 000.
 const XPBD_TEAM_MIN_PARTICLES: usize = 8192;
+
+/// Particles from which the small-steps solver shares the step of a grid
+/// cloth without self-collision among threads when the step is busy: near
+/// a still obstacle's edges (32 substeps at 60 Hz, each with the lanes'
+/// planes and the springs kept off the edges) or after a step that touched
+/// an obstacle (the lanes' contacts and the stretch limit at work). A
+/// falling cloth's substeps stay too short to share below
+/// [`XPBD_TEAM_MIN_PARTICLES`]. Measured (thirty-fourth session, `run
+/// SCENE --frames 120`, three alternated runs, ms a frame): sharing from
+/// 4096 in every step, the `box` 4.17 → 4.22–4.33 and the drape at N = 64
+/// 1.28–1.29 → 1.35–1.37 (its fall paid for the handouts, though `bench`,
+/// which times the landed frames, went 4.16 → 3.35 and 1.10 → 0.87); in
+/// busy steps only, the `box` 4.21–4.31 → 3.40–3.45, the drape at N = 64
+/// 1.23–1.27 → 1.07 and at N = 80 2.02–2.05 → 1.65–1.74 (N = 56, below
+/// it, 0.90–0.93 either way).
+const XPBD_BUSY_TEAM_MIN_PARTICLES: usize = 4096;
 
 /// Puts the cloth back as it was at the start of the step.
 fn restore(cloth: &mut Cloth, ws: &super::workspace::Workspace) {

@@ -45,6 +45,10 @@ pub(crate) struct Workspace {
     /// The longest stretch or shear rest length (m) of the cloth last
     /// stepped, and its mass revision then.
     pub longest_rest: Option<(u64, f32)>,
+    /// Whether the last step touched an obstacle: a step that does shares
+    /// its loops among threads from fewer particles (`schedule.rs`,
+    /// `shares_well`). Scratch: the threads change no bit.
+    pub touched_last_step: bool,
 }
 
 impl Workspace {
