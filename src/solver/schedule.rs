@@ -529,9 +529,10 @@ const XPBD_TEAM_MIN_PARTICLES: usize = 8192;
 
 /// Particles from which the small-steps solver shares the step of a grid
 /// cloth without self-collision among threads when the step is busy: near
-/// a still obstacle's edges (32 substeps at 60 Hz, each with the lanes'
-/// planes and the springs kept off the edges) or after a step that touched
-/// an obstacle (the lanes' contacts and the stretch limit at work). A
+/// an obstacle's edges (a still one's take 32 substeps at 60 Hz, each with
+/// the lanes' planes and the springs kept off the edges) or after a step
+/// that touched an obstacle (the lanes' contacts and the stretch limit at
+/// work). A
 /// falling cloth's substeps stay too short to share below
 /// [`XPBD_TEAM_MIN_PARTICLES`]. Measured (thirty-fourth session, `run
 /// SCENE --frames 120`, three alternated runs, ms a frame): sharing from
