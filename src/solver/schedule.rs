@@ -532,8 +532,7 @@ const XPBD_TEAM_MIN_PARTICLES: usize = 8192;
 /// an obstacle's edges (a still one's take 32 substeps at 60 Hz, each with
 /// the lanes' planes and the springs kept off the edges) or after a step
 /// that touched an obstacle (the lanes' contacts and the stretch limit at
-/// work). A
-/// falling cloth's substeps stay too short to share below
+/// work). A falling cloth's substeps stay too short to share below
 /// [`XPBD_TEAM_MIN_PARTICLES`]. Measured (thirty-fourth session, `run
 /// SCENE --frames 120`, three alternated runs, ms a frame): sharing from
 /// 4096 in every step, the `box` 4.17 → 4.22–4.33 and the drape at N = 64
