@@ -259,3 +259,36 @@ fn the_tear_scene_tears_in_two_the_same_on_any_thread_count() {
     assert_eq!(one.2, 2, "the sheet is not in two pieces");
     assert!(one == run(2), "two threads differ from one");
 }
+
+/// At other sizes too the `tear` scene tears along its slit's column alone,
+/// into two pieces. As the sheet parts, its edge rows hold the whole load,
+/// and at N = 96 a spring two columns from the tip tore with it in both
+/// edge rows while the tearing stage waited only one ring around a split.
+#[test]
+fn the_tear_scene_tears_along_its_line_at_other_sizes() {
+    for n in [32, 96] {
+        let options = SceneOptions {
+            n: Some(n),
+            ..Default::default()
+        };
+        let mut scene = Scene::build(SceneKind::Tear, &options).unwrap();
+        let cols = scene.cloth.topology().cells().unwrap().cols;
+        let mid = ((cols - 1) / 2) as u32;
+        let mut torn = 0;
+        for _ in 0..scene.frames {
+            torn += scene.step_frame().unwrap().torn_springs;
+            for e in scene.solver.tear_events() {
+                assert_eq!(
+                    e.particle % cols as u32,
+                    mid,
+                    "N = {n}: off the line: {e:?}"
+                );
+            }
+        }
+        let rows = scene.cloth.topology().cells().unwrap().rows;
+        // Every row but the slit's tore, once.
+        let slit = 2 * (rows / 10) + 1;
+        assert_eq!(torn as usize, rows - slit, "N = {n}: torn springs");
+        assert_eq!(pieces(&scene.cloth), 2, "N = {n}: not in two pieces");
+    }
+}

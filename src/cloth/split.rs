@@ -58,6 +58,18 @@ impl TopologyEdit {
         }
     }
 
+    /// Adds to `out` the particles that share a triangle with `p` (and are
+    /// not in it yet).
+    pub(crate) fn add_ring(&self, p: u32, out: &mut Vec<u32>) {
+        for t in self.triangles.iter().filter(|t| t.contains(&p)) {
+            for &u in t.iter().filter(|&&u| u != p) {
+                if !out.contains(&u) {
+                    out.push(u);
+                }
+            }
+        }
+    }
+
     /// Splits particle `p` across the plane through it with unit `normal`, or
     /// returns `None` when all its triangles lie on one side (nothing would
     /// open). `ring` receives the particles that shared a triangle with `p`.

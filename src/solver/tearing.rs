@@ -3,7 +3,7 @@
 //! at one of its ends, worst first, by splitting that particle across the
 //! spring (`Cloth::split_particle`). Only the worst springs tear in one step
 //! (those strained at least halfway from the tear strain to the worst), and
-//! not beside a particle split in the same step: the others wait for the
+//! not within two rings of a particle split in the same step: the others wait for the
 //! next step, when the cloth has opened and their load has changed. So a
 //! tear runs along the overloaded line a particle or two a step, as a crack
 //! does, instead of shattering the cloth at once.
@@ -40,7 +40,7 @@ pub(crate) struct Tearing {
     pub events: Vec<TearEvent>,
     /// Overstrained springs: strain and particles.
     overstrained: Vec<(f32, u32, u32)>,
-    /// Particles split, or beside one split, in this step.
+    /// Particles split, or within two rings of one split, in this step.
     touched: Vec<bool>,
     /// Per particle: how far its overstrained springs are past the tear
     /// strain, summed.
@@ -112,6 +112,15 @@ impl Tearing {
                 .or_else(|| edit.split(particles, ends[1].0, ends[1].1, &mut self.ring));
             let Some(split) = split else { continue };
             self.touched.push(true);
+            // Two rings around the split wait, not one: as a sheet parts,
+            // its last row holds the whole load, and a spring two columns
+            // from the tip tore with it (the `tear` scene at N = 96 and
+            // 128 tore beside its line so in its edge rows; with two rings
+            // the tip's split unloads them first).
+            for k in 0..self.ring.len() {
+                let u = self.ring[k];
+                edit.add_ring(u, &mut self.ring);
+            }
             for &p in [a, b].iter().chain(&self.ring) {
                 self.touched[p as usize] = true;
             }
