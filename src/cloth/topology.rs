@@ -170,6 +170,20 @@ impl Topology {
         })
     }
 
+    /// For a torn grid cloth (one grid, not joined, split since): the grid
+    /// it was built on, whose `cols × rows` particles keep their cells and
+    /// come first, the particles the splits made after them. Most of its
+    /// springs are still the grid's; the small-steps solver sweeps those on
+    /// the grid's lanes and the rest one by one (`solver/grid_leftover.rs`).
+    pub fn torn_lane_grid(&self) -> Option<LaneGrid> {
+        let grid = self.split_from.filter(|_| self.grid.is_none())?;
+        let count = grid.cols.checked_mul(grid.rows)?;
+        (self.pieces.is_empty() && self.uvs.len() >= count).then_some(LaneGrid {
+            grid,
+            piece_rows: grid.rows,
+        })
+    }
+
     /// Every split so far, in order, as (particle split, new particle): a
     /// new particle started where the particle it came from was, so a frame
     /// recorded before the split can place it there (exports do).

@@ -20,6 +20,11 @@
 //! sweep: before the stretch limit this order landed the drape at N = 128
 //! 0.3% more stretched; with it, the peak over every frame went 4.61 →
 //! 4.65% (N = 64: 4.50 → 4.56%).
+//!
+//! A torn grid ([`GridPlan::torn`]) keeps the runs: the springs it lost
+//! are lanes at rest length 0, which project nothing, its new particles
+//! lanes past the grid's, and the springs the runs cannot hold are swept
+//! after them (`grid_leftover.rs`).
 
 #[cfg(test)]
 use crate::cloth::Grid;
@@ -28,6 +33,7 @@ use crate::math::simd_available;
 use crate::parallel::{Disjoint, Team};
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
+use super::grid_leftover::LeftoverSprings;
 use super::staggered::Staggered;
 use crate::collision::LIMIT_SLACK;
 
@@ -152,6 +158,10 @@ pub(crate) struct GridPlan {
     /// The marks' value before the last call's first pass: a call's marks
     /// run above every earlier call's ([`GridPlan::next_limit_base`]).
     limit_base: u32,
+    /// A torn grid's springs that no run holds (none for a whole grid).
+    leftover: LeftoverSprings,
+    /// The plan is a torn grid's ([`GridPlan::torn`]).
+    torn: bool,
 }
 
 /// Below this many springs, a phase of a pass runs on one thread: handing
@@ -244,6 +254,21 @@ fn segments(
     out
 }
 
+/// Per particle of a grid of `n` particles: joined by a spring to one past
+/// the grid's (a tear's edge: a split handed it to a new particle).
+fn at_tears(n: usize, (a, b): (&[u32], &[u32])) -> Vec<bool> {
+    let mut edge = vec![false; n];
+    for (&i, &j) in a.iter().zip(b) {
+        let (i, j) = (i as usize, j as usize);
+        if i >= n || j >= n {
+            for end in [i, j].into_iter().filter(|&e| e < n) {
+                edge[end] = true;
+            }
+        }
+    }
+    edge
+}
+
 /// True when lanes `a..a + len` and `b..b + len` do not overlap.
 fn apart(a: u32, b: u32, len: u32) -> bool {
     a + len <= b || b + len <= a
@@ -299,17 +324,41 @@ impl GridPlan {
     /// they are not its pieces' families: every spring of each family
     /// within each piece, none crossing into another piece.
     pub fn stacked(lanes: LaneGrid, springs: &Springs) -> Option<GridPlan> {
+        GridPlan::build(lanes, springs, None)
+    }
+
+    /// The plan for a torn grid cloth of `particles` particles
+    /// ([`crate::cloth::Topology::torn_lane_grid`]): the grid's springs
+    /// that are left in its runs (the lost ones at rest length 0) but for
+    /// those at the tear's edge, which go with every other spring among
+    /// the leftovers ([`LeftoverSprings`]), and the
+    /// particles past the grid's in lanes of their own after its last row
+    /// (in the last band: no run reaches them). `None` when the grid is
+    /// not the first of the particles.
+    pub fn torn(lanes: LaneGrid, springs: &Springs, particles: usize) -> Option<GridPlan> {
+        GridPlan::build(lanes, springs, Some(particles))
+    }
+
+    /// [`Self::stacked`], or with `torn` (the particle count)
+    /// [`Self::torn`].
+    fn build(lanes: LaneGrid, springs: &Springs, torn: Option<usize>) -> Option<GridPlan> {
         let grid = lanes.grid;
         let (cols, rows) = (grid.cols, grid.rows);
         if lanes.piece_rows == 0 || !rows.is_multiple_of(lanes.piece_rows) {
             return None;
         }
         let pieces = rows / lanes.piece_rows;
-        let n = cols * rows;
+        let n = cols.checked_mul(rows)?;
+        // Every lane: the grid's, then the torn cloth's new particles.
+        let all = torn.unwrap_or(n);
+        if all < n || (torn.is_some() && pieces != 1) {
+            return None;
+        }
         let blocks = row_blocks(cols);
         let off = block_offsets(cols, blocks);
         let lane: Vec<u32> = (0..n)
             .map(|i| ((i / cols) * cols + off[(i % cols) % blocks] + (i % cols) / blocks) as u32)
+            .chain((n..all).map(|i| i as u32))
             .collect();
         let families: [(SpringKind, usize, isize, usize); 6] = [
             (SpringKind::Stretch, 0, 1, 2),
@@ -323,35 +372,67 @@ impl GridPlan {
             .iter()
             .map(|&(kind, dr, dc, _)| Pass { kind, dr, dc })
             .collect();
-        let mut rest = Staggered::new(6, n, REST_SLOT);
+        let mut rest = Staggered::new(6, all, REST_SLOT);
         let mut count = [0usize; 6];
+        let mut leftover = LeftoverSprings::default();
         let (a, b) = springs.endpoints();
+        // At a tear's edge the springs are left to the leftovers' sweep, in
+        // their stored colour order (as `general_sweep.rs` takes them),
+        // not the runs': the runs' order along a row (blocks of columns,
+        // each swept forward) left the strain beside a tear's tip uneven,
+        // and the `tear` scene at N = 32 tore beside its line (two columns
+        // off, 2 sweeps a substep). So, at N = 32 to 128 with 2 to 4
+        // sweeps, it tears on its line, as with the general sweep.
+        let edge = match torn {
+            Some(_) => at_tears(n, (a, b)),
+            None => Vec::new(),
+        };
+        // Each spring's colour class, when its springs share no particle.
+        let mut class = springs
+            .colour_ranges()
+            .iter()
+            .zip(&springs.colour_disjoint)
+            .enumerate()
+            .flat_map(|(k, (range, &disjoint))| {
+                range.clone().map(move |_| disjoint.then_some(k as u32))
+            });
         for s in 0..springs.len() {
-            let (mut i, mut j) = (a[s] as usize, b[s] as usize);
-            if i >= n || j >= n {
-                return None;
-            }
-            if i > j {
-                std::mem::swap(&mut i, &mut j);
-            }
-            let (ri, ci, rj, cj) = (i / cols, i % cols, j / cols, j % cols);
-            let (dr, dc) = (rj - ri, cj as isize - ci as isize);
-            if !lanes.same_piece(ri, rj) {
+            let (first, second) = (a[s] as usize, b[s] as usize);
+            if first >= all || second >= all {
                 return None;
             }
             let kind = springs.kind(s);
-            let f = families
-                .iter()
-                .position(|&(k, fr, fc, _)| k == kind && fr == dr && fc == dc)?;
-            let rest = &mut rest.get_mut(f)[lane[i] as usize];
-            if *rest != 0.0 {
-                return None; // the same spring twice
+            let (i, j) = (first.min(second), first.max(second));
+            // The family and the lane of its first end, for a grid spring.
+            let in_run = (j < n)
+                .then(|| {
+                    let (ri, ci, rj, cj) = (i / cols, i % cols, j / cols, j % cols);
+                    let (dr, dc) = (rj - ri, cj as isize - ci as isize);
+                    let f = families
+                        .iter()
+                        .position(|&(k, fr, fc, _)| k == kind && fr == dr && fc == dc)?;
+                    lanes.same_piece(ri, rj).then_some((f, lane[i] as usize))
+                })
+                .flatten()
+                .filter(|&(f, at)| rest.get(f)[at] == 0.0)
+                .filter(|_| !(edge.get(i).is_some_and(|&e| e) || edge.get(j).is_some_and(|&e| e)));
+            let colour = class.next().flatten();
+            match (in_run, torn) {
+                (Some((f, at)), _) => {
+                    rest.get_mut(f)[at] = springs.rest_lengths()[s];
+                    count[f] += 1;
+                }
+                // Not the grid's (or the same spring twice): a torn grid
+                // sweeps it on its own, a whole one is no plan.
+                (None, Some(_)) => {
+                    let ends = (lane[first], lane[second]);
+                    leftover.push(ends, springs.rest_lengths()[s], (kind, colour));
+                }
+                (None, None) => return None,
             }
-            *rest = springs.rest_lengths()[s];
-            count[f] += 1;
         }
         // Every spring of a family present in each piece: the loops run over
-        // whole rows (of a piece).
+        // whole rows (of a piece). A torn grid's lost ones rest at 0.
         let r = lanes.piece_rows;
         let full = [
             (cols - 1) * r,
@@ -362,14 +443,20 @@ impl GridPlan {
             cols * r.saturating_sub(2),
         ]
         .map(|count| count * pieces);
-        if count != full {
+        if torn.is_none() && count != full {
             return None;
         }
-        let phases = regions(
+        leftover.finish(all);
+        let mut phases = regions(
             (cols, blocks),
             lanes,
             &families.map(|(_, dr, dc, p)| (dr, dc, p)),
         );
+        if let Some(last) = phases[0].last_mut() {
+            // The new particles' lanes in the last band, so that each
+            // band's loop over its particles takes them too.
+            last.lanes.end = all;
+        }
         let work = std::array::from_fn(|phase| {
             std::array::from_fn(|p| {
                 let runs = phases[phase].iter().flat_map(|region| &region.runs[p]);
@@ -384,7 +471,7 @@ impl GridPlan {
         // leaving (r, c) and (r, c + 1); along columns likewise.
         let span = [(0, 1), (1, cols)].map(|(family, next)| {
             let (stretch, bend) = (rest.get(family), rest.get(4 + family));
-            let mut span = vec![0.0; n];
+            let mut span = vec![0.0; all];
             for i in 0..n {
                 let (l, m) = (lane[i] as usize, i + next);
                 if bend[l] > 0.0 {
@@ -400,11 +487,13 @@ impl GridPlan {
             flags: PhaseFlags::new(phases[0].len()),
             phases,
             work,
-            lambda: Staggered::new(6, n, LAMBDA_SLOT),
+            lambda: Staggered::new(6, all, LAMBDA_SLOT),
             rest,
             span,
             longest_stretch,
-            limit_moved: vec![0; n],
+            leftover,
+            torn: torn.is_some(),
+            limit_moved: vec![0; all],
             limit_base: 0,
         })
     }
@@ -421,6 +510,17 @@ impl GridPlan {
         }
         self.limit_base += LIMIT_PASSES;
         self.limit_base
+    }
+
+    /// The plan is a torn grid's ([`GridPlan::torn`]): its runs miss
+    /// springs, so the chain solves along rows and columns do not apply.
+    pub fn is_torn(&self) -> bool {
+        self.torn
+    }
+
+    /// The springs no run holds (a torn grid's), to sweep after the runs.
+    pub fn leftover_mut(&mut self) -> &mut LeftoverSprings {
+        &mut self.leftover
     }
 
     /// The lane of particle `i`.
@@ -1542,7 +1642,7 @@ const SURELY_WITHIN: f32 = 1.0 - 1.0e-5;
 /// root, then two divisions one after the other, was the sweep's longest
 /// chain).
 #[inline(always)]
-fn project(
+pub(super) fn project(
     a: [f32; 3],
     b: [f32; 3],
     motion: [f32; 3],
@@ -1783,6 +1883,53 @@ mod tests {
             .chain(&*z)
             .map(|v| v.to_bits())
             .collect()
+    }
+
+    /// A torn grid's plan holds each spring once, in a run at its lane or
+    /// among the leftovers: those of the new particles and of the particles
+    /// at the tear's edge there; each particle has one lane, the new ones
+    /// past the grid's, in the last band. A whole grid has no leftovers.
+    #[test]
+    fn a_torn_grids_plan_holds_every_spring_once() {
+        let runs = |plan: &GridPlan| -> usize {
+            (0..6)
+                .map(|p| plan.rest.get(p).iter().filter(|&&r| r > 0.0).count())
+                .sum()
+        };
+        let mut cloth = ClothBuilder::new(13, 9).build().unwrap();
+        let whole = GridPlan::new(cloth.grid().unwrap(), cloth.springs()).unwrap();
+        assert_eq!(whole.leftover.len(), 0);
+        assert_eq!(runs(&whole), cloth.springs().len());
+        for r in 2..=5 {
+            let i = cloth.index(r, 6).unwrap();
+            assert!(cloth
+                .split_particle(i, crate::math::Vector::X)
+                .unwrap()
+                .is_some());
+        }
+        let lanes = cloth.topology().torn_lane_grid().unwrap();
+        let (grid, n) = (13 * 9, cloth.particle_count());
+        assert_eq!(n, grid + 4);
+        assert!(GridPlan::stacked(lanes, cloth.springs()).is_none());
+        let plan = GridPlan::torn(lanes, cloth.springs(), n).unwrap();
+        assert!(plan.is_torn());
+        assert_eq!(runs(&plan) + plan.leftover.len(), cloth.springs().len());
+        let (a, b) = cloth.springs().endpoints();
+        let edge = at_tears(grid, (a, b));
+        let at_edge = (0..a.len())
+            .filter(|&s| {
+                [a[s], b[s]]
+                    .iter()
+                    .any(|&e| e as usize >= grid || edge[e as usize])
+            })
+            .count();
+        assert!(at_edge > 4, "the tear's springs: {at_edge}");
+        assert_eq!(plan.leftover.len(), at_edge);
+        let mut seen = plan.lane.clone();
+        seen.sort_unstable();
+        assert!(seen.iter().copied().eq(0..n as u32), "a lane each");
+        assert!((grid..n).all(|i| plan.lane(i) == i));
+        assert_eq!(plan.phases[0].last().unwrap().lanes.end, n);
     }
 
     #[test]

@@ -11,6 +11,7 @@ mod filter;
 mod general_sweep;
 mod global_matrix;
 mod grid_chains;
+mod grid_leftover;
 mod grid_sweep;
 mod implicit_euler;
 mod integrate;

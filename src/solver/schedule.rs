@@ -279,7 +279,9 @@ impl ClothSolver {
         let mut watch = Lap::start();
         // Stages after the integrator that move the particles.
         let moved_after = cloth.params.self_collision || cloth.params.tethers;
-        let grid = cloth.topology.lane_grid();
+        // A torn grid's lanes too: xpbd sweeps its springs on them.
+        let topology = &cloth.topology;
+        let grid = topology.lane_grid().or_else(|| topology.torn_lane_grid());
         for substep in 0..k {
             let ctx = StepContext {
                 dt,

@@ -125,10 +125,13 @@ struct PlanKey {
     springs: usize,
     count: usize,
     ends: [u32; 2],
+    /// For a torn grid: the cloth's mass revision (a tear, which moves
+    /// springs between particles, makes a new one).
+    revision: Option<u64>,
 }
 
 impl PlanKey {
-    fn of(grid: LaneGrid, springs: &Springs) -> PlanKey {
+    fn of(grid: LaneGrid, springs: &Springs, revision: Option<u64>) -> PlanKey {
         let rest = springs.rest_lengths();
         let bits = |r: Option<&f32>| r.map_or(0, |r| r.to_bits());
         PlanKey {
@@ -136,6 +139,7 @@ impl PlanKey {
             springs: springs as *const Springs as usize,
             count: springs.len(),
             ends: [bits(rest.first()), bits(rest.last())],
+            revision,
         }
     }
 }
@@ -182,14 +186,23 @@ pub(crate) fn step(
         gamma: p.damping / (p.stiffness * h),
     });
     // A grid of as many particles as the cloth (one made otherwise, or
-    // pieces that claim another size, is swept as springs).
-    let grid = sub
-        .grid
-        .filter(|g| g.grid.cols.checked_mul(g.grid.rows) == Some(n));
+    // pieces that claim another size, is swept as springs), or a torn
+    // grid's first particles when the material has no stretch limit (the
+    // grid's limit would miss the springs the tear moved off its runs).
+    let whole = |g: &LaneGrid| g.grid.cols.checked_mul(g.grid.rows) == Some(n);
+    let torn = |g: &LaneGrid| {
+        let count = g.grid.cols.checked_mul(g.grid.rows);
+        count.is_some_and(|c| c <= n) && !model.stretch_limit.is_finite()
+    };
+    let grid = sub.grid.filter(|g| whole(g) || torn(g));
     if let Some(grid) = grid {
-        let key = PlanKey::of(grid, model.springs);
+        // A torn grid's springs change with each tear, which makes a new
+        // mass revision.
+        let revision = (!whole(&grid)).then_some(sub.mass_revision);
+        let key = PlanKey::of(grid, model.springs, revision);
         if ws.planned_for != Some(key) {
-            ws.plan = GridPlan::stacked(grid, model.springs);
+            ws.plan = GridPlan::stacked(grid, model.springs)
+                .or_else(|| GridPlan::torn(grid, model.springs, n));
             ws.planned_for = Some(key);
             ws.chains.replanned();
         }
@@ -284,17 +297,22 @@ pub(crate) fn step(
                     .map(|&i| plan.lane(i as usize) as u32),
             );
             let planes = &mut ws.planes;
-            if sub.settings.xpbd_chains {
+            // The chains solve whole rows and columns of stretch springs,
+            // which a torn grid no longer has.
+            let chains = sub.settings.xpbd_chains && !plan.is_torn();
+            if chains {
                 let alpha = compliance[0].alpha;
                 ws.chains.solve(plan, l, (alpha, sub.mass_revision), team);
                 project_planes(planes, lane, l, team);
                 contacts.project(l, team);
             }
             let later = later_sweep_kinds(&model.spring_params);
-            let sweeps = grid_sweeps(sub.settings);
+            let sweeps = grid_sweeps(sub.settings, chains);
+            plan.leftover_mut().begin_substep();
             for it in 0..sweeps {
-                let kinds = kinds_in_sweep(it, sweeps, later, sub.settings.xpbd_chains);
+                let kinds = kinds_in_sweep(it, sweeps, later, chains);
                 sweep(plan, l, &compliance, kinds, team);
+                plan.leftover_mut().sweep(l, &compliance, kinds);
                 project_planes(planes, lane, l, team);
             }
             // The lanes' contacts after the last sweep only (after each:
@@ -783,8 +801,8 @@ fn later_sweep_kinds(params: &[SpringParams; 3]) -> [bool; 3] {
 }
 
 /// The sweeps a substep of a grid cloth takes: the settings' solves
-/// (`xpbd_iterations`), of which the chain solves, when they run, are the
-/// first (never no sweep: the shear and bend springs have only the
+/// (`xpbd_iterations`), of which the chain solves, when they run
+/// (`chains`), are the first (never no sweep: the shear and bend springs have only the
 /// sweeps). The chains meet the stretch springs' compliance exactly along
 /// rows and columns, and one sweep after them hangs a cloth 10 µm from
 /// the force-based equilibrium (`tests/xpbd.rs`; one sweep alone, 1.2 mm).
@@ -793,9 +811,9 @@ fn later_sweep_kinds(params: &[SpringParams; 3]) -> [bool; 3] {
 /// 4.87 → 4.91%), the `pins` corners 5.52 → 5.42%, the curtain 5.09 →
 /// 5.05%, the hammock 5.26 → 5.33%, `box` 5.18 → 5.40%; the drape's
 /// frame 13–30% shorter (BENCHMARKS.md, twenty-third session).
-fn grid_sweeps(settings: &SolverSettings) -> u32 {
+fn grid_sweeps(settings: &SolverSettings, chains: bool) -> u32 {
     let solves = settings.xpbd_iterations.max(1);
-    if settings.xpbd_chains {
+    if chains {
         (solves - 1).max(1)
     } else {
         solves
