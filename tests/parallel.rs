@@ -48,8 +48,10 @@ fn the_default_solver_gives_the_same_bits_on_two_threads_as_on_one() {
     // the edge pass), the box on its cube (contact planes held inside the
     // substep, in chunks on the team) and the hammock with its dynamic boxes (momentum
     // handed to rapier, summed in particle order); the fold's
-    // self-collision, whose look for pairs runs on the team.
+    // self-collision, whose look for pairs runs on the team; the torn
+    // sheet, its grid's runs on the team and the torn springs one by one.
     for (kind, n, frames) in [
+        (SceneKind::Tear, 128, 45),
         (SceneKind::Drape, 64, 40),
         (SceneKind::Box, 64, 40),
         (SceneKind::Hammock, 64, 60),
@@ -65,11 +67,12 @@ fn the_default_solver_gives_the_same_bits_on_two_threads_as_on_one() {
                 };
                 let mut scene = Scene::build(kind, &options).unwrap();
                 assert_eq!(scene.solver.settings.integrator, Integrator::Xpbd);
-                let (mut contacts, mut self_contacts) = (0, 0);
+                let (mut contacts, mut self_contacts, mut torn) = (0, 0, 0);
                 for _ in 0..frames {
                     let report = scene.step_frame().unwrap();
                     contacts += report.contacts;
                     self_contacts += report.self_contacts;
+                    torn += report.torn_springs;
                 }
                 let bodies: Vec<u32> = scene
                     .rapier
@@ -80,13 +83,18 @@ fn the_default_solver_gives_the_same_bits_on_two_threads_as_on_one() {
                         t.into_iter().chain(v).map(f32::to_bits)
                     })
                     .collect();
-                (bits(&scene.cloth), bodies, contacts, self_contacts)
+                (bits(&scene.cloth), bodies, (contacts, self_contacts, torn))
             })
         };
         let one = run(1);
-        assert!(one.2 > 0, "{kind:?}: no contact in the run");
+        let (contacts, self_contacts, torn) = one.2;
+        if kind == SceneKind::Tear {
+            assert!(torn > 0, "the sheet never tore");
+        } else {
+            assert!(contacts > 0, "{kind:?}: no contact in the run");
+        }
         if matches!(kind, SceneKind::Fold | SceneKind::Stack) {
-            assert!(one.3 > 0, "{kind:?}: the layers never touched");
+            assert!(self_contacts > 0, "{kind:?}: the layers never touched");
         }
         if kind == SceneKind::Hammock {
             assert!(!one.1.is_empty(), "the hammock has bodies");

@@ -39,7 +39,7 @@ use super::substep::Substep;
 use super::substeps::Substeps;
 use super::substeps::{self_collision_substeps, MAX_SELF_SUBSTEP};
 use super::xpbd;
-use crate::cloth::{Cloth, Particles, SpringKind};
+use crate::cloth::{Cloth, LaneGrid, Particles, SpringKind};
 use crate::collision::{
     any_stretch_over_limit, LookBasis, Obstacle, ResolveOptions, SelfContactParams,
 };
@@ -279,9 +279,7 @@ impl ClothSolver {
         let mut watch = Lap::start();
         // Stages after the integrator that move the particles.
         let moved_after = cloth.params.self_collision || cloth.params.tethers;
-        // A torn grid's lanes too: xpbd sweeps its springs on them.
-        let topology = &cloth.topology;
-        let grid = topology.lane_grid().or_else(|| topology.torn_lane_grid());
+        let grid = lane_grid(cloth);
         for substep in 0..k {
             let ctx = StepContext {
                 dt,
@@ -486,19 +484,32 @@ fn look_basis(cloth: &Cloth, thickness: f32) -> LookBasis<'_> {
     }
 }
 
+/// The grid the small-steps solver lays `cloth` out on: its own, its
+/// pieces' stacked, or a torn grid's when its material has no stretch
+/// limit (the grid's limit would miss the springs the tear moved off its
+/// runs; `grid_sweep::GridPlan::torn`).
+fn lane_grid(cloth: &Cloth) -> Option<LaneGrid> {
+    let topology = cloth.topology();
+    let unlimited = cloth.material.stretch_limit.is_none();
+    topology
+        .lane_grid()
+        .or_else(|| topology.torn_lane_grid().filter(|_| unlimited))
+}
+
 /// Particles from which a step's loops are shared among threads.
 const TEAM_MIN_PARTICLES: usize = 2048;
 
 /// True when a step of `cloth` with `integrator` gains from a team of
 /// threads: a few thousand particles or more (below, the loops are too
 /// short to share), and loops that keep their data on one thread. Not so
-/// the small-steps solver on a cloth without a grid (torn, joined, a mesh)
-/// and without self-collision: its spring sweep runs on one thread, and the
+/// the small-steps solver on a cloth without lanes ([`lane_grid`]: a mesh,
+/// joined cloths of other shapes, a torn one with a stretch limit) and
+/// without self-collision: its spring sweep runs on one thread, and the
 /// particles the collision stage's blocks moved on the other came back to
-/// it every substep (the torn sheet, 64 × 32 and 128 × 64: 3.0 → 3.4 and
-/// 31 → 34 ms a frame with two threads, its serial sweep the slower).
+/// it every substep (the torn sheet on the general sweep, 64 × 32 and 128
+/// × 64: 3.0 → 3.4 and 31 → 34 ms a frame with two threads).
 ///
-/// A grid cloth without self-collision shares the small-steps solver's
+/// A cloth with lanes and without self-collision shares the small-steps solver's
 /// step from [`XPBD_TEAM_MIN_PARTICLES`] particles, or from
 /// [`XPBD_BUSY_TEAM_MIN_PARTICLES`] in a `busy` step (one near an
 /// obstacle's edges, or after a step that touched an obstacle).
@@ -510,7 +521,7 @@ fn shares_well(cloth: &Cloth, integrator: Integrator, busy: bool) -> bool {
         } else {
             XPBD_TEAM_MIN_PARTICLES
         };
-        return cloth.topology().lane_grid().is_some() && n >= least;
+        return lane_grid(cloth).is_some() && n >= least;
     }
     n >= TEAM_MIN_PARTICLES
 }
