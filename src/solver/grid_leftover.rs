@@ -1,6 +1,6 @@
 //! The springs of a torn grid cloth that the grid's runs leave out: the
 //! springs a split handed to a new particle (past the grid's), any that is
-//! not one of the grid's six families, and those near a tear
+//! not one of the grid's six families, and those at a tear's edge
 //! (`grid_sweep.rs` says why). The grid keeps the thousands of others in
 //! its vector runs, where the springs it lost are lanes at rest length 0,
 //! which project nothing (`grid_sweep::project`). These few hundred are
@@ -37,8 +37,8 @@ pub(crate) struct LeftoverSprings {
     colour: Vec<Option<u32>>,
     /// Multiplier of each spring over the substep's sweeps (N·s²).
     lambda: Vec<f32>,
-    /// Runs of consecutive springs of one kind, and whether they share no
-    /// particle ([`LeftoverSprings::finish`]).
+    /// Runs of consecutive springs of one kind and colour class, and
+    /// whether they share no particle ([`LeftoverSprings::finish`]).
     groups: Vec<(std::ops::Range<usize>, bool)>,
     /// One more than the highest lane a spring reaches.
     lanes: usize,
@@ -293,7 +293,7 @@ mod tests {
         let (one, eight) = (run(false), run(simd_available()));
         assert_eq!(one, eight);
         // The sweep moved the lanes (the check can fail).
-        let (mut still, _) = (Lanes::default(), ());
+        let mut still = Lanes::default();
         fill(&mut still);
         let before: Vec<u32> = still
             .arrays_mut()
