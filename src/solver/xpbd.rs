@@ -187,14 +187,11 @@ pub(crate) fn step(
     });
     // A grid of as many particles as the cloth (one made otherwise, or
     // pieces that claim another size, is swept as springs), or a torn
-    // grid's first particles when the material has no stretch limit (the
-    // grid's limit would miss the springs the tear moved off its runs).
+    // grid's first particles (the schedule hands one over only for a
+    // material without a stretch limit: `schedule::lane_grid`).
     let whole = |g: &LaneGrid| g.grid.cols.checked_mul(g.grid.rows) == Some(n);
-    let torn = |g: &LaneGrid| {
-        let count = g.grid.cols.checked_mul(g.grid.rows);
-        count.is_some_and(|c| c <= n) && !model.stretch_limit.is_finite()
-    };
-    let grid = sub.grid.filter(|g| whole(g) || torn(g));
+    let fits = |g: &LaneGrid| g.grid.cols.checked_mul(g.grid.rows).is_some_and(|c| c <= n);
+    let grid = sub.grid.filter(fits);
     if let Some(grid) = grid {
         // A torn grid's springs change with each tear, which makes a new
         // mass revision.
