@@ -69,12 +69,12 @@ impl LeftoverSprings {
         self.a.len()
     }
 
-    /// After the last [`Self::push`], on a cloth of `lanes` lanes: groups
-    /// the springs into runs of one kind and colour class (a run of a class
-    /// checked to share no particle may be swept eight at a time).
-    pub fn finish(&mut self, lanes: usize) {
+    /// After the last [`Self::push`]: groups the springs into runs of one
+    /// kind and colour class (a run of a class checked to share no particle
+    /// may be swept eight at a time).
+    pub fn finish(&mut self) {
         self.groups.clear();
-        let mut seen = vec![u32::MAX; lanes.max(self.lanes)];
+        let mut seen = vec![u32::MAX; self.lanes];
         let mut start = 0;
         while start < self.a.len() {
             let key = (self.kind[start], self.colour[start]);
@@ -254,7 +254,7 @@ mod tests {
         for s in 0..3u32 {
             springs.push((s, s + 50), 0.1, (SpringKind::Bend, Some(1)));
         }
-        springs.finish(n);
+        springs.finish();
         assert_eq!(springs.groups.len(), 2);
         assert!(
             springs.groups.iter().all(|g| g.1),

@@ -446,7 +446,7 @@ impl GridPlan {
         if torn.is_none() && count != full {
             return None;
         }
-        leftover.finish(all);
+        leftover.finish();
         let mut phases = regions(
             (cols, blocks),
             lanes,

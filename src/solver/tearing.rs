@@ -116,7 +116,8 @@ impl Tearing {
             // its last row holds the whole load, and a spring two columns
             // from the tip tore with it (the `tear` scene at N = 96 and
             // 128 tore beside its line so in its edge rows; with two rings
-            // the tip's split unloads them first).
+            // the tip's split unloads them first). The range is the first
+            // ring's, fixed before the loop adds the second behind it.
             for k in 0..self.ring.len() {
                 let u = self.ring[k];
                 edit.add_ring(u, &mut self.ring);

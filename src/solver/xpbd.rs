@@ -189,9 +189,9 @@ pub(crate) fn step(
     // pieces that claim another size, is swept as springs), or a torn
     // grid's first particles (the schedule hands one over only for a
     // material without a stretch limit: `schedule::lane_grid`).
-    let whole = |g: &LaneGrid| g.grid.cols.checked_mul(g.grid.rows) == Some(n);
-    let fits = |g: &LaneGrid| g.grid.cols.checked_mul(g.grid.rows).is_some_and(|c| c <= n);
-    let grid = sub.grid.filter(fits);
+    let cells = |g: &LaneGrid| g.grid.cols.checked_mul(g.grid.rows);
+    let whole = |g: &LaneGrid| cells(g) == Some(n);
+    let grid = sub.grid.filter(|g| cells(g).is_some_and(|c| c <= n));
     if let Some(grid) = grid {
         // A torn grid's springs change with each tear, which makes a new
         // mass revision.
