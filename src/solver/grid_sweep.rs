@@ -34,6 +34,7 @@ use crate::parallel::{Disjoint, Team};
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
 use super::grid_leftover::LeftoverSprings;
+use super::pin_support::PinSupport;
 use super::staggered::Staggered;
 use crate::collision::LIMIT_SLACK;
 
@@ -162,6 +163,8 @@ pub(crate) struct GridPlan {
     leftover: LeftoverSprings,
     /// The plan is a torn grid's ([`GridPlan::torn`]).
     torn: bool,
+    /// The stretch limit's weights of a pinned cloth ([`PinSupport`]).
+    pin_support: PinSupport,
 }
 
 /// Below this many springs, a phase of a pass runs on one thread: handing
@@ -495,7 +498,24 @@ impl GridPlan {
             torn: torn.is_some(),
             limit_moved: vec![0; all],
             limit_base: 0,
+            pin_support: PinSupport::default(),
         })
+    }
+
+    /// The stretch limit's weights for particles of inverse masses
+    /// `inv_mass` joined by `springs`, at the cloth's mass `revision`
+    /// ([`PinSupport::update`]).
+    pub(crate) fn support_from_pins(&mut self, inv_mass: &[f32], springs: &Springs, revision: u64) {
+        let lane = &self.lane;
+        let lane_of = |i: usize| lane.get(i).map_or(usize::MAX, |&l| l as usize);
+        self.pin_support
+            .update(inv_mass, springs, lane_of, revision);
+    }
+
+    /// Whether the cloth has pins ([`PinSupport`]): its stretch limit
+    /// weighs particles near them as heavier.
+    pub(crate) fn pinned(&self) -> bool {
+        self.pin_support.pinned()
     }
 
     /// The marks' base for a new call of the stretch limit: pass `k` of it
@@ -1133,7 +1153,12 @@ fn limit_stretch_with(
     }
     let base = plan.next_limit_base();
     let moved = Disjoint::new(&mut plan.limit_moved[..]);
-    let shared = SharedLanes::new(lanes, &mut plan.lambda);
+    let mut shared = SharedLanes::new(lanes, &mut plan.lambda);
+    // A pinned cloth's limit moves particles by their weights near the
+    // pins ([`PinSupport`]), not by their inverse masses.
+    if let Some(weights) = plan.pin_support.weights(shared.w.len()) {
+        shared.w = weights;
+    }
     // The pairs of stretch springs along rows and columns first (the bend
     // families' runs, with the length the pair spans at rest), then the
     // stretch springs themselves: a correction crosses the cloth in half

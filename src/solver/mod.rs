@@ -19,6 +19,7 @@ mod integrator;
 mod lane_contacts;
 mod lane_motion;
 mod ordering;
+mod pin_support;
 mod preconditioner;
 mod report;
 mod rk4;

@@ -206,6 +206,7 @@ pub(crate) fn step(
     }
     match (&mut ws.plan, grid) {
         (Some(plan), Some(_)) => {
+            plan.support_from_pins(model.inv_mass, model.springs, sub.mass_revision);
             let team = sub.team;
             let l = &mut ws.lanes;
             l.resize(n);
@@ -635,10 +636,26 @@ fn project_planes(planes: &mut ContactPlanes, lane: &[u32], lanes: &mut Lanes, t
 /// pinned cloth hangs with springs far over the limit at its pins: the
 /// `pins` sheet hung by two corners peaks at 5.5% instead of 8.5%, the
 /// `hammock` at 5.3% instead of 8.6%, each about a third slower a frame.
+/// A pinned cloth takes up to [`PINNED_LIMIT_ROUNDS`].
 const LIMIT_ROUNDS: u32 = 5;
 
+/// [`LIMIT_ROUNDS`] for a cloth with pins, whose limit weighs the
+/// particles near them as heavier (`pin_support.rs`): a cloth hung by its
+/// pins hangs on long runs of springs at the limit, which come back a few
+/// springs a call. Measured, peak stretch over every frame and ms a frame
+/// (BENCHMARKS.md, thirty-sixth session), a cotton sheet hung by two
+/// corners at N = 64, 96 and 128: 9.8%, 31% and 68% with 5 calls and
+/// equal weights (2.6, 6.8 and 13.5 ms); with the weights, 6.5%, 20% and
+/// 33% with 5 calls, 4.75%, 5.5% and 19% with 20, 4.75%, 4.75% and 13%
+/// with 40 (2.4, 6.8 and 25 ms). The pinned canonical scenes (`pins`,
+/// `curtain`, `flag`, `hammock`) step as fast as with 5 calls and equal
+/// weights, or faster; the `box`, without pins, took 3.1 → 3.5 ms a frame
+/// with 20, so a cloth without pins keeps 5.
+const PINNED_LIMIT_ROUNDS: u32 = 40;
+
 /// The stretch limit on the lanes (`factor` times the rest length, the
-/// first of `limit`), in up to [`LIMIT_ROUNDS`] calls of
+/// first of `limit`), in up to [`LIMIT_ROUNDS`] ([`PINNED_LIMIT_ROUNDS`]
+/// for a cloth with pins) calls of
 /// [`limit_stretch`]; returns the room (m) every stretch spring has left
 /// below it (`None`: not known).
 ///
@@ -662,7 +679,12 @@ fn hold_limit(
     team: Team,
 ) -> Option<f32> {
     let mut outcome = limit_stretch(plan, lanes, limit, team);
-    for _ in 1..LIMIT_ROUNDS {
+    let rounds = if plan.pinned() {
+        PINNED_LIMIT_ROUNDS
+    } else {
+        LIMIT_ROUNDS
+    };
+    for _ in 1..rounds {
         if !outcome.unsettled {
             break;
         }
