@@ -42,3 +42,4 @@ pub use self_intersections::self_intersections;
 pub use stage::CollisionStage;
 pub(crate) use stage::ResolveOptions;
 pub(crate) use stretch_hold::{any_stretch_over_limit, stop_separating, LIMIT_SLACK};
+pub(crate) use stretch_incidence::StretchIncidence;

@@ -1,14 +1,15 @@
 //! The stretch springs at each particle, for the stretch hold
 //! (`stretch_hold.rs`): after a hold moves a particle, the springs it must
-//! look at again are those at that particle.
+//! look at again are those at that particle; and for the stretch limit's
+//! weights near pins (`solver/pin_support.rs`), found by walking them.
 
 use crate::cloth::{SpringKind, Springs};
 
 /// The stretch springs at each particle, counted in spring order among the
 /// stretch springs (a particle's in `springs[start[i]..start[i + 1]]`, in
 /// ascending order).
-#[derive(Debug, Default)]
-pub(super) struct StretchIncidence {
+#[derive(Debug, Default, Clone)]
+pub(crate) struct StretchIncidence {
     start: Vec<u32>,
     springs: Vec<u32>,
     /// Scratch of the filling.

@@ -25,6 +25,7 @@
 //! fast it gets there, and which end of a spring moves on the way.
 
 use crate::cloth::{SpringKind, Springs};
+use crate::collision::StretchIncidence;
 
 /// Stretch springs from the nearest pin over which the stretch limit's
 /// weights grow to the particles' own inverse masses (linearly: `d /
@@ -47,12 +48,10 @@ pub(crate) struct PinSupport {
     /// The cloth's mass revision the weights are of.
     of: Option<u64>,
     /// Scratch: each particle's distance in springs from the nearest pin,
-    /// the breadth-first queue, and the stretch springs at each particle
-    /// (offsets, then the other ends).
+    /// the breadth-first queue, and the stretch springs at each particle.
     distance: Vec<u32>,
     queue: Vec<u32>,
-    start: Vec<u32>,
-    other: Vec<u32>,
+    springs_at: StretchIncidence,
 }
 
 impl PinSupport {
@@ -76,7 +75,9 @@ impl PinSupport {
         if !inv_mass.contains(&0.0) {
             return;
         }
-        self.springs_at(springs, n);
+        self.springs_at.build(springs, n);
+        let (a, b) = springs.endpoints();
+        let first = springs.range(SpringKind::Stretch).start;
         // Breadth first from every pin at once.
         self.distance.clear();
         self.distance.resize(n, u32::MAX);
@@ -95,8 +96,9 @@ impl PinSupport {
             if d > PIN_SUPPORT_SPRINGS {
                 break; // every particle nearer is found
             }
-            for k in self.start[i] as usize..self.start[i + 1] as usize {
-                let j = self.other[k] as usize;
+            for &k in self.springs_at.at(i) {
+                let s = first + k as usize;
+                let j = if a[s] as usize == i { b[s] } else { a[s] } as usize;
                 if self.distance[j] == u32::MAX {
                     self.distance[j] = d;
                     self.queue.push(j as u32);
@@ -110,41 +112,6 @@ impl PinSupport {
                 *weight = w * share;
             }
         }
-    }
-
-    /// The stretch springs at each particle of `n`, as offsets into the
-    /// other ends (a spring with an end past `n` left out).
-    fn springs_at(&mut self, springs: &Springs, n: usize) {
-        let (a, b) = springs.endpoints();
-        let stretch = springs.range(SpringKind::Stretch);
-        let ends = || {
-            stretch
-                .clone()
-                .map(|s| (a[s] as usize, b[s] as usize))
-                .filter(|&(i, j)| i < n && j < n)
-        };
-        self.start.clear();
-        self.start.resize(n + 1, 0);
-        for (i, j) in ends() {
-            self.start[i + 1] += 1;
-            self.start[j + 1] += 1;
-        }
-        for i in 0..n {
-            self.start[i + 1] += self.start[i];
-        }
-        self.other.clear();
-        self.other.resize(self.start[n] as usize, 0);
-        // Filled from each particle's offset on, then the offsets put back.
-        for (i, j) in ends() {
-            self.other[self.start[i] as usize] = j as u32;
-            self.start[i] += 1;
-            self.other[self.start[j] as usize] = i as u32;
-            self.start[j] += 1;
-        }
-        for i in (1..=n).rev() {
-            self.start[i] = self.start[i - 1];
-        }
-        self.start[0] = 0;
     }
 
     /// The limit's weight of each lane, when the cloth has pins and there
