@@ -162,7 +162,13 @@ fn a_fine_sheet_hung_by_its_corners_swings_under_five_percent_stretch() {
     // springs at their limit from each pin: these peaked at 9.8% and
     // 12.7% when the limit weighed every particle alike (they need the
     // pins' support carried out through the cloth, `pin_support.rs`).
-    for (pins, n) in [(PinPreset::TwoCorners, 64), (PinPreset::FourCorners, 96)] {
+    // At N = 128 two corners peaked at 13% with the 16 substeps of a
+    // coarser sheet (they need the side rule's 28, `stability.rs`).
+    for (pins, n) in [
+        (PinPreset::TwoCorners, 64),
+        (PinPreset::FourCorners, 96),
+        (PinPreset::TwoCorners, 128),
+    ] {
         let peak = peak_stretch_hung_by(pins, n);
         assert!(
             peak < 0.05,

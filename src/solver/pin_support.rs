@@ -34,7 +34,9 @@ use crate::collision::StretchIncidence;
 /// BENCHMARKS.md, thirty-sixth session): a cotton sheet hung by two corners
 /// at N = 64, 96 and 128: 4.75%, 4.75% and 13% (equal weights: 4.76%, 4.8%,
 /// 14%, and at N = 96 twice the time); by four corners at N = 128 7.5%
-/// (8.7%); the `hammock` 5.14% (5.18%). Over 32 springs, or with the
+/// (8.7%); the `hammock` 5.14% (5.18%). (Those at 16 substeps; the side
+/// rule of `stability.rs` now takes 20 and 28 at N = 96 and 128: 4.77%
+/// and 4.89% by two corners, 4.66% by four.) Over 32 springs, or with the
 /// weights halved a spring, the hammock's cotton peaked at 5.3–6.4%.
 pub(crate) const PIN_SUPPORT_SPRINGS: u32 = 16;
 

@@ -271,11 +271,50 @@ pub fn stable_substep(cloth: &Cloth, settings: &SolverSettings) -> f32 {
     safety * h
 }
 
+/// The longest grid side (particles) at which
+/// [`XPBD_CHAIN_SUBSTEPS_PER_SECOND`] holds unscaled for a cloth of a
+/// material with a stretch limit that hangs from pins or meets moving
+/// obstacles ([`stable_substeps`]).
+const XPBD_CHAIN_SIDE: f32 = 80.0;
+
+/// Past [`XPBD_CHAIN_SIDE`], [`stable_substeps`] adds a substep a frame at
+/// 60 Hz for every this many particles along the side: 16 substeps at
+/// N = 80, 20 at 96, 28 at 128, 36 at 160. A cloth hung from pins hangs on
+/// runs of springs at the stretch limit as long as its side, and a
+/// substep's limit holds a longer run in more calls (up to
+/// `xpbd::PINNED_LIMIT_ROUNDS`) or not at all. Measured, peak stretch over
+/// every frame and ms a frame at 16 substeps → this rule (BENCHMARKS.md,
+/// thirty-seventh session): the `pins` sheet hung by two corners at N =
+/// 96 4.75% → 4.77% (7.8 → 7.4 ms), at 128 13.0% → 4.89% (27.8 → 21.4),
+/// at 160 28.8% → 5.58% (68 → 47; 4.92% with 64 substeps); by four
+/// corners at 128 7.53% → 4.66% (23.2 → 12.1); the `curtain` at N = 96
+/// 5.62% → 4.95%, at 128 5.97% → 4.59%, at 160 6.08% → 4.72%. The sheet
+/// hung by its centre held 4.51% at 16 substeps up to N = 128 and pays
+/// for the others (7.4 → 10.4 ms at 128). Up to N = 80 every case above
+/// held under 5% at 16.
+const XPBD_CHAIN_PARTICLES_PER_SUBSTEP: f32 = 4.0;
+
+/// The substeps a second at least of the small-steps solver with its chain
+/// solves on `cloth` hung from pins or among moving obstacles:
+/// [`XPBD_CHAIN_SUBSTEPS_PER_SECOND`], and for a material with a stretch
+/// limit on a grid whose longer side (a piece's, for stacked pieces) is
+/// past [`XPBD_CHAIN_SIDE`], one a frame at 60 Hz more for every
+/// [`XPBD_CHAIN_PARTICLES_PER_SUBSTEP`] particles.
+fn chain_substeps_per_second(cloth: &Cloth) -> f32 {
+    let side = match cloth.topology().lane_grid() {
+        Some(lanes) if cloth.material.stretch_limit.is_some() => lanes.piece_side() as f32,
+        _ => 0.0,
+    };
+    let past = (side - XPBD_CHAIN_SIDE).max(0.0);
+    XPBD_CHAIN_SUBSTEPS_PER_SECOND + 60.0 * past / XPBD_CHAIN_PARTICLES_PER_SUBSTEP
+}
+
 /// The substeps that keep the integrator of `settings` within its
 /// stability limit for a frame step `dt` (with the small-steps solver's
-/// chain solves, at least 960 a second).
+/// chain solves, at least 960 a second, more on a fine grid:
+/// [`chain_substeps_per_second`]).
 pub fn stable_substeps(cloth: &Cloth, settings: &SolverSettings, dt: f32) -> u32 {
-    substeps_at_least(cloth, settings, dt, XPBD_CHAIN_SUBSTEPS_PER_SECOND)
+    substeps_at_least(cloth, settings, dt, chain_substeps_per_second(cloth))
 }
 
 /// [`stable_substeps`] for a cloth without pins whose every obstacle is a
@@ -351,6 +390,35 @@ fn whole_substeps(k: f32) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cloth::{ClothBuilder, Material};
+
+    #[test]
+    fn a_limited_cloths_chain_substeps_grow_with_its_side_past_80() {
+        let dt = 1.0 / 60.0;
+        let substeps = |n: usize, material: Material| {
+            let cloth = ClothBuilder::new(n, n).material(material).build().unwrap();
+            substeps_at_rate(dt, chain_substeps_per_second(&cloth))
+        };
+        assert_eq!(substeps(40, Material::cotton()), 16.0);
+        assert_eq!(substeps(80, Material::cotton()), 16.0);
+        assert_eq!(substeps(96, Material::cotton()), 20.0);
+        assert_eq!(substeps(128, Material::cotton()), 28.0);
+        // The longer side counts.
+        let cloth = ClothBuilder::new(128, 20)
+            .material(Material::cotton())
+            .build()
+            .unwrap();
+        assert_eq!(
+            substeps_at_rate(dt, chain_substeps_per_second(&cloth)),
+            28.0
+        );
+        // Without a stretch limit, the floor alone.
+        let unlimited = Material {
+            stretch_limit: None,
+            ..Material::cotton()
+        };
+        assert_eq!(substeps(128, unlimited), 16.0);
+    }
 
     #[test]
     fn a_limited_cloths_substeps_grow_with_its_side_past_128() {

@@ -647,7 +647,8 @@ const LIMIT_ROUNDS: u32 = 5;
 /// corners at N = 64, 96 and 128: 9.8%, 31% and 68% with 5 calls and
 /// equal weights (2.6, 6.8 and 13.5 ms); with the weights, 6.5%, 20% and
 /// 33% with 5 calls, 4.75%, 5.5% and 19% with 20, 4.75%, 4.75% and 13%
-/// with 40 (2.4, 6.8 and 25 ms). The pinned canonical scenes (`pins`,
+/// with 40 (2.4, 6.8 and 25 ms), all at 16 substeps (the side rule of
+/// `stability.rs` now takes 28 at N = 128: 4.89% in 20 ms). The pinned canonical scenes (`pins`,
 /// `curtain`, `flag`, `hammock`) step as fast as with 5 calls and equal
 /// weights, or faster; the `box`, without pins, took 3.1 → 3.5 ms a frame
 /// with 20, so a cloth without pins keeps 5.
