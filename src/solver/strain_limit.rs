@@ -20,6 +20,28 @@ use crate::math::Vector;
 /// Gauss–Seidel passes at most; they stop as soon as none is over the limit.
 pub(crate) const PASSES: usize = 4;
 
+/// Passes at most of the small-steps solver's limit on a cloth without a
+/// grid plan (a mesh, a torn sheet; [`limit_stretch_relaxed`]). A mesh
+/// hung from a few points hangs on long runs of springs at the limit,
+/// which plain passes carry a pin's correction along a spring or two at a
+/// time: a 64 × 64 quad mesh of cotton hung by two corners peaked at 24%
+/// stretch with 4 plain passes (weighted by mass). Measured, peak over
+/// every frame and ms a frame (BENCHMARKS.md, thirty-seventh session),
+/// over-relaxed passes weighted by the pins' support: 48², 64² and 96²
+/// hung by two corners 7.1%, 7.8%, 8.8% with 20 passes; 4.8%, 5.3%, 5.8%
+/// with 40; 4.51%, 4.73%, 4.91% with 80 (5.6 → 6.5, 13.6 → 18.1, 44 → 79
+/// ms); by four corners at 64 4.51% with 20 (14.0% before). The passes stop
+/// once none shortens a spring, so a cloth within its limit pays one.
+pub(crate) const RELAXED_PASSES: usize = 80;
+
+/// How far past its limit a pass of [`limit_stretch_relaxed`] shortens a
+/// spring: 1.9 times its excess, as the grid's limit does
+/// (`grid_sweep::LIMIT_OVER_RELAXATION`, which says why). With exact
+/// projections the 80 passes seldom settle: the 48² and 64² meshes hung by
+/// two corners peaked at 5.7% in three to four times the frame (20.7 and
+/// 60.8 ms against 6.5 and 19.0 at 1.9).
+const OVER_RELAXATION: f32 = 1.9;
+
 /// Holds every stretch spring to at most `factor` times its rest length,
 /// moving the free particles' positions `x` (m); with velocities `v`
 /// (m/s), takes away the ends' relative velocity that stretches a
@@ -28,8 +50,36 @@ pub(crate) fn limit_stretch(
     springs: &Springs,
     inv_mass: &[f32],
     x: &mut [Vector],
+    v: Option<&mut [Vector]>,
+    factor: f32,
+) -> u32 {
+    limit_passes(springs, inv_mass, x, v, factor, (PASSES, 1.0))
+}
+
+/// The small-steps solver's limit on a cloth without a grid plan: as
+/// [`limit_stretch`] without velocities (it takes them from the positions
+/// afterwards), each end moved by its `weight` (1/kg: the inverse mass, or
+/// less near a pin, `pin_support.rs`), over-relaxed
+/// ([`OVER_RELAXATION`]), in up to [`RELAXED_PASSES`] passes.
+pub(crate) fn limit_stretch_relaxed(
+    springs: &Springs,
+    weight: &[f32],
+    x: &mut [Vector],
+    factor: f32,
+) -> u32 {
+    let passes = (RELAXED_PASSES, OVER_RELAXATION);
+    limit_passes(springs, weight, x, None, factor, passes)
+}
+
+/// Up to `passes.0` Gauss–Seidel passes of the limit, each spring over it
+/// shortened by `passes.1` times its excess.
+fn limit_passes(
+    springs: &Springs,
+    inv_mass: &[f32],
+    x: &mut [Vector],
     mut v: Option<&mut [Vector]>,
     factor: f32,
+    (passes, relaxation): (usize, f32),
 ) -> u32 {
     if !factor.is_finite() {
         return 0;
@@ -37,7 +87,7 @@ pub(crate) fn limit_stretch(
     let (a, b) = springs.endpoints();
     let rest = springs.rest_lengths();
     let mut shortened = 0;
-    for _ in 0..PASSES {
+    for _ in 0..passes {
         let mut over = 0;
         for s in springs.range(SpringKind::Stretch) {
             let (i, j) = (a[s] as usize, b[s] as usize);
@@ -49,7 +99,7 @@ pub(crate) fn limit_stretch(
             if excess.is_nan() || excess <= limit * LIMIT_SLACK || w == 0.0 {
                 continue;
             }
-            let step = d * (excess / (w * len));
+            let step = d * (relaxation * excess / (w * len));
             let (di, dj) = (step * inv_mass[i], -step * inv_mass[j]);
             x[i] += di;
             x[j] += dj;

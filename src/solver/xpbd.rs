@@ -50,6 +50,7 @@ use super::grid_sweep::{
 };
 use super::lane_contacts::LaneContacts;
 use super::lane_motion::{self, Motion};
+use super::pin_support::PinSupport;
 use super::settings::SolverSettings;
 use super::strain_limit;
 use super::substep::Substep;
@@ -67,6 +68,9 @@ pub(crate) struct XpbdScratch {
     planned_for: Option<PlanKey>,
     /// Structure-of-arrays copies for the grid sweep.
     lanes: Lanes,
+    /// The stretch limit's weights near pins for a cloth without a grid
+    /// plan (`pin_support.rs`; a grid plan holds its own, by lane).
+    pin_support: PinSupport,
     /// Per spring: its multiplier over the substep's sweeps (the general sweep).
     lambda: Vec<f32>,
     /// The particles packed for the general sweep (`general_sweep.rs`).
@@ -435,7 +439,11 @@ pub(crate) fn step(
                 general_sweep::sweep(springs, &mut ws.general, &mut ws.lambda, &compliance);
             }
             ws.general.store(x);
-            strain_limit::limit_stretch(springs, w, x, None, model.stretch_limit);
+            // A pinned cloth's limit moves particles near the pins less, as
+            // the grid's does (`pin_support.rs`).
+            ws.pin_support.update(w, springs, |i| i, sub.mass_revision);
+            let weight = ws.pin_support.weights(n).unwrap_or(w);
+            strain_limit::limit_stretch_relaxed(springs, weight, x, model.stretch_limit);
             for i in 0..n {
                 let correction = x[i] - ws.predicted[i];
                 correct_velocity(&mut v[i], correction, model.inv_mass[i], h);
