@@ -227,7 +227,13 @@ fn a_grid_written_as_obj_reads_back_as_the_same_cloth() {
 fn square_mesh(n: u32) -> ClothMesh {
     let step = 1.0 / (n - 1) as f32;
     let positions = (0..n * n)
-        .map(|i| Vector::new((i % n) as f32 * step - 0.5, 0.6, (i / n) as f32 * step - 0.5))
+        .map(|i| {
+            Vector::new(
+                (i % n) as f32 * step - 0.5,
+                0.6,
+                (i / n) as f32 * step - 0.5,
+            )
+        })
         .collect();
     let faces = (0..n - 1)
         .flat_map(|r| (0..n - 1).map(move |c| (r, c)))

@@ -20,7 +20,11 @@
 //! (shock propagation, Guendelman et al. 2003, in a mild form), and the
 //! pin's correction travels the run in fewer passes. Only the limit
 //! weighs so; the springs' sweeps and the chain solves keep the masses,
-//! and a cloth without pins is limited as before. A limit that has
+//! and a cloth without pins is limited as before. The limit of a cloth
+//! without a grid plan, and the one every other integrator gets after its
+//! substep (`strain_limit::limit_stretch_relaxed`), weigh by the same
+//! weights, by particle rather than by lane (and the velocities they take
+//! from a shortened spring's ends too). A limit that has
 //! converged holds the same lengths whatever the weights: they change how
 //! fast it gets there, and which end of a spring moves on the way.
 
@@ -40,8 +44,9 @@ use crate::collision::StretchIncidence;
 /// weights halved a spring, the hammock's cotton peaked at 5.3–6.4%.
 pub(crate) const PIN_SUPPORT_SPRINGS: u32 = 16;
 
-/// The stretch limit's weight of each lane of a grid plan, for a cloth
-/// with pins ([`PinSupport::update`]); none for a cloth without.
+/// The stretch limit's weight of each lane of a grid plan (or of each
+/// particle, the lanes then the particles' own order), for a cloth with
+/// pins ([`PinSupport::update`]); none for a cloth without.
 #[derive(Debug, Default, Clone)]
 pub(crate) struct PinSupport {
     /// Per lane: the inverse mass the limit moves the particle by (1/kg);

@@ -56,19 +56,21 @@ pub(crate) fn limit_stretch(
     limit_passes(springs, inv_mass, x, v, factor, (PASSES, 1.0))
 }
 
-/// The small-steps solver's limit on a cloth without a grid plan: as
-/// [`limit_stretch`] without velocities (it takes them from the positions
-/// afterwards), each end moved by its `weight` (1/kg: the inverse mass, or
-/// less near a pin, `pin_support.rs`), over-relaxed
-/// ([`OVER_RELAXATION`]), in up to [`RELAXED_PASSES`] passes.
+/// The limit after a substep that did not hold it itself (every
+/// integrator but the small-steps solver, and that one on a cloth without
+/// a grid plan, which takes its velocities from the positions afterwards
+/// and passes none): as [`limit_stretch`], each end moved by its `weight`
+/// (1/kg: the inverse mass, or less near a pin, `pin_support.rs`),
+/// over-relaxed ([`OVER_RELAXATION`]), in up to [`RELAXED_PASSES`] passes.
 pub(crate) fn limit_stretch_relaxed(
     springs: &Springs,
     weight: &[f32],
     x: &mut [Vector],
+    v: Option<&mut [Vector]>,
     factor: f32,
 ) -> u32 {
     let passes = (RELAXED_PASSES, OVER_RELAXATION);
-    limit_passes(springs, weight, x, None, factor, passes)
+    limit_passes(springs, weight, x, v, factor, passes)
 }
 
 /// Up to `passes.0` Gauss–Seidel passes of the limit, each spring over it
