@@ -20,8 +20,9 @@ use crate::math::Vector;
 /// Gauss–Seidel passes at most; they stop as soon as none is over the limit.
 pub(crate) const PASSES: usize = 4;
 
-/// Passes at most of the small-steps solver's limit on a cloth without a
-/// grid plan (a mesh, a torn sheet; [`limit_stretch_relaxed`]). A mesh
+/// Passes at most of [`limit_stretch_relaxed`]: the small-steps solver's
+/// limit on a cloth without a grid plan (a mesh, a torn sheet), and every
+/// other integrator's within its stability limit. A mesh
 /// hung from a few points hangs on long runs of springs at the limit,
 /// which plain passes carry a pin's correction along a spring or two at a
 /// time: a 64 × 64 quad mesh of cotton hung by two corners peaked at 24%
@@ -29,8 +30,8 @@ pub(crate) const PASSES: usize = 4;
 /// every frame and ms a frame (BENCHMARKS.md, thirty-seventh session),
 /// over-relaxed passes weighted by the pins' support: 48², 64² and 96²
 /// hung by two corners 7.1%, 7.8%, 8.8% with 20 passes; 4.8%, 5.3%, 5.8%
-/// with 40; 4.51%, 4.73%, 4.91% with 80 (5.6 → 6.5, 13.6 → 18.1, 44 → 79
-/// ms); by four corners at 64 4.51% with 20 (14.0% before). The passes stop
+/// with 40; 4.51%, 4.73%, 4.91% with 80 (5.6 → 6.5, 13.6 → 18–19, 44 →
+/// 79 ms); by four corners at 64 4.51% with 20 (14.0% before). The passes stop
 /// once none shortens a spring, so a cloth within its limit pays one.
 pub(crate) const RELAXED_PASSES: usize = 80;
 
