@@ -5,6 +5,7 @@
 
 mod chain_transpose;
 mod cloth_solver;
+mod contact_follow;
 mod explicit_euler;
 mod fast_mass_spring;
 mod filter;
