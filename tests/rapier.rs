@@ -247,6 +247,11 @@ fn hammock_holds_the_boxes_and_sags_under_them() {
     let m = run(&mut scene, frames).unwrap();
     assert!(m.finite);
     assert!(m.max_penetration_any_frame <= 0.002, "{m:?}");
+    // The cotton stays within its limit as the boxes land: the contacts
+    // with the boxes, resolved after the substep's limit, left it 5.14%
+    // stretched at their impacts before the cloth followed them
+    // (solver/contact_follow.rs).
+    assert!(m.max_stretch_any_frame < 0.05, "{m:?}");
     // After 4 s the boxes have come to rest: none moved faster than 5 cm/s
     // during the last frame.
     assert!(m.bodies_max_speed.unwrap() < 0.05, "{m:?}");

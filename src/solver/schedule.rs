@@ -283,6 +283,10 @@ impl ClothSolver {
         let relaxed_limit = !self.settings.integrator.limits_stretch_itself()
             && h <= stable_substep(cloth, &self.settings) * (1.0 + 1.0e-4);
         let edges = self.settings.edge_collisions;
+        // The cloth follows what the contacts pushed (contact_follow.rs)
+        // with every integrator, unless an explicit one runs past its
+        // stability limit (that run must still diverge and say so).
+        let follows = relaxed_limit || self.settings.integrator.limits_stretch_itself();
         let ws = &mut self.workspace;
         let mut report = StepReport {
             substeps: k,
@@ -488,9 +492,7 @@ impl ClothSolver {
                 },
             );
             report.contacts += touched;
-            // An integrator that does not hold the limit inside its substep:
-            // the cloth follows what the contacts pushed (contact_follow.rs).
-            if relaxed_limit && touched > 0 {
+            if follows && touched > 0 {
                 follow_contacts(cloth, obstacles, ws, (ctx.thickness, team));
             }
             watch.lap(&mut times.contacts);
