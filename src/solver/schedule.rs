@@ -37,7 +37,7 @@ use super::stability::{
     chains_lengthen, edge_substeps, stable_substep, stable_substeps, unpinned_substeps,
 };
 use super::stage_times::Lap;
-use super::strain_limit::{limit_stretch, limit_stretch_relaxed};
+use super::strain_limit::{limit_stretch, limit_stretch_relaxed, relaxed_passes};
 use super::substep::Substep;
 use super::substeps::Substeps;
 use super::substeps::{self_collision_substeps, MAX_SELF_SUBSTEP};
@@ -419,7 +419,8 @@ impl ClothSolver {
                 ws.pin_support.update(&p.inv_mass, springs, |i| i, revision);
                 let weight = ws.pin_support.weights(p.inv_mass.len());
                 let weight = weight.unwrap_or(&p.inv_mass);
-                limit_stretch_relaxed(springs, weight, &mut p.x, Some(&mut p.v), factor);
+                let passes = relaxed_passes(h);
+                limit_stretch_relaxed(springs, weight, (&mut p.x, Some(&mut p.v)), factor, passes);
             } else if !limits_itself || self_touching > 0 || tethered {
                 limit_stretch(springs, &p.inv_mass, &mut p.x, Some(&mut p.v), factor);
             }
@@ -493,7 +494,7 @@ impl ClothSolver {
             );
             report.contacts += touched;
             if follows && touched > 0 {
-                follow_contacts(cloth, obstacles, ws, (ctx.thickness, team));
+                follow_contacts(cloth, obstacles, ws, (ctx.thickness, h, team));
             }
             watch.lap(&mut times.contacts);
         }

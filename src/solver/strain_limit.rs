@@ -35,6 +35,28 @@ pub(crate) const PASSES: usize = 4;
 /// once none shortens a spring, so a cloth within its limit pays one.
 pub(crate) const RELAXED_PASSES: usize = 80;
 
+/// The passes at most of [`limit_stretch_relaxed`] after a substep of `h`
+/// seconds: [`RELAXED_PASSES`] for every 1/960 s of it, rounded (at least
+/// one lot, at most 32: a 30 Hz frame in one step). The limit's work then
+/// goes by the time simulated, as the substeps' does: an integrator taking
+/// one step a 60 Hz frame (implicit Euler, fast mass-spring) gets 1280
+/// passes where one taking a hundred substeps gets 80 after each. The
+/// passes stop once none shortens a spring. Measured on the `pins` sheet
+/// hung by two corners, peak stretch over 120 frames, fast mass-spring /
+/// implicit Euler with 80, 160, 320, 640 and 1280 passes: at N = 48 9.9 /
+/// 6.0%, 6.6 / 4.6%, 4.85 / 4.51%, 4.51 / 4.51%, 4.51 / 4.51%; at N = 64
+/// 16.8 / 20.6% with 80, 4.56 / 4.51% with 1280, at the same time a frame
+/// (BENCHMARKS.md, thirty-eighth session). The small-steps solver's
+/// substeps are a twelfth of a frame or shorter: 80.
+pub(crate) fn relaxed_passes(h: f32) -> usize {
+    let lots = (h * 960.0).round();
+    if lots.is_finite() {
+        RELAXED_PASSES * (lots.clamp(1.0, 32.0) as usize)
+    } else {
+        RELAXED_PASSES
+    }
+}
+
 /// How far past its limit a pass of [`limit_stretch_relaxed`] shortens a
 /// spring: 1.9 times its excess, as the grid's limit does
 /// (`grid_sweep::LIMIT_OVER_RELAXATION`, which says why). With exact
@@ -62,15 +84,16 @@ pub(crate) fn limit_stretch(
 /// a grid plan, which takes its velocities from the positions afterwards
 /// and passes none): as [`limit_stretch`], each end moved by its `weight`
 /// (1/kg: the inverse mass, or less near a pin, `pin_support.rs`),
-/// over-relaxed ([`OVER_RELAXATION`]), in up to [`RELAXED_PASSES`] passes.
+/// over-relaxed ([`OVER_RELAXATION`]), in up to `passes` passes
+/// ([`RELAXED_PASSES`], or [`relaxed_passes`] by the substep).
 pub(crate) fn limit_stretch_relaxed(
     springs: &Springs,
     weight: &[f32],
-    x: &mut [Vector],
-    v: Option<&mut [Vector]>,
+    (x, v): (&mut [Vector], Option<&mut [Vector]>),
     factor: f32,
+    passes: usize,
 ) -> u32 {
-    let passes = (RELAXED_PASSES, OVER_RELAXATION);
+    let passes = (passes, OVER_RELAXATION);
     limit_passes(springs, weight, x, v, factor, passes)
 }
 

@@ -443,7 +443,13 @@ pub(crate) fn step(
             // the grid's does (`pin_support.rs`).
             ws.pin_support.update(w, springs, |i| i, sub.mass_revision);
             let weight = ws.pin_support.weights(n).unwrap_or(w);
-            strain_limit::limit_stretch_relaxed(springs, weight, x, None, model.stretch_limit);
+            strain_limit::limit_stretch_relaxed(
+                springs,
+                weight,
+                (x, None),
+                model.stretch_limit,
+                strain_limit::RELAXED_PASSES,
+            );
             for i in 0..n {
                 let correction = x[i] - ws.predicted[i];
                 correct_velocity(&mut v[i], correction, model.inv_mass[i], h);
