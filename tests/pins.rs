@@ -180,6 +180,18 @@ fn a_fine_sheet_hung_by_its_corners_swings_under_five_percent_stretch() {
     }
 }
 
+/// The `pins` sheet of `n` particles a side hung by two corners with
+/// `integrator` peaks under 5% stretch over its run.
+fn assert_hangs_under_five_percent(integrator: Integrator, n: usize) {
+    let peak = peak_stretch_hung_with(PinPreset::TwoCorners, n, integrator);
+    assert!(
+        peak < 0.05,
+        "{} at N = {n}: peak stretch {:.2}%",
+        integrator.name(),
+        100.0 * peak
+    );
+}
+
 #[test]
 fn every_integrator_holds_a_sheet_hung_by_two_corners_under_five_percent() {
     // The integrators that do not hold the limit in their own substep get
@@ -187,13 +199,7 @@ fn every_integrator_holds_a_sheet_hung_by_two_corners_under_five_percent() {
     // holds (`strain_limit.rs`); with four plain passes weighted by mass
     // the 33² sheet peaked at 15–20% with each of them but explicit Euler.
     for integrator in Integrator::ALL {
-        let peak = peak_stretch_hung_with(PinPreset::TwoCorners, 33, integrator);
-        assert!(
-            peak < 0.05,
-            "{}: peak stretch {:.2}%",
-            integrator.name(),
-            100.0 * peak
-        );
+        assert_hangs_under_five_percent(integrator, 33);
     }
 }
 
@@ -204,12 +210,6 @@ fn the_one_step_integrators_hold_a_finer_sheet_hung_by_two_corners_under_five_pe
     // with implicit Euler; the passes now go by the step's length
     // (`strain_limit::relaxed_passes`: 1280 for a 60 Hz step).
     for integrator in [Integrator::FastMassSpring, Integrator::ImplicitEuler] {
-        let peak = peak_stretch_hung_with(PinPreset::TwoCorners, 64, integrator);
-        assert!(
-            peak < 0.05,
-            "{}: peak stretch {:.2}%",
-            integrator.name(),
-            100.0 * peak
-        );
+        assert_hangs_under_five_percent(integrator, 64);
     }
 }
