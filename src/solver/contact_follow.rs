@@ -32,7 +32,7 @@
 //! spring over the limit and take no round (the hammock: 12 197 of 12 391
 //! calls in 480 frames, the rest 1–9 rounds).
 
-use super::strain_limit::{limit_stretch_relaxed, relaxed_passes};
+use super::strain_limit::{limit_stretch_supported, relaxed_passes};
 use super::workspace::Workspace;
 use crate::cloth::Cloth;
 use crate::collision::{any_stretch_over_limit, Obstacle};
@@ -40,39 +40,38 @@ use crate::parallel::Team;
 
 /// Rounds of the limit and the obstacles at most; they stop as soon as no
 /// stretch spring is over the limit.
-pub(crate) const ROUNDS: usize = 16;
+const ROUNDS: usize = 16;
 
 /// After the collision stage of a substep of `h` seconds: up to [`ROUNDS`]
 /// rounds of the relaxed stretch limit over the whole cloth (its passes by
 /// the substep, `relaxed_passes`) and the obstacles' push out to
 /// `thickness` (m), while a stretch spring is over the limit (module
-/// docs). Returns the rounds taken.
+/// docs).
 pub(crate) fn follow_contacts(
     cloth: &mut Cloth,
     obstacles: &[Obstacle],
     ws: &mut Workspace,
     (thickness, h, team): (f32, f32, Team),
-) -> usize {
+) {
     let factor = cloth.material.stretch_limit_factor();
     if !factor.is_finite() || obstacles.is_empty() {
-        return 0;
+        return;
     }
     let springs = &cloth.topology.springs;
     let revision = cloth.mass_revision();
     let p = &mut cloth.particles;
-    for round in 0..ROUNDS {
+    for _ in 0..ROUNDS {
         if !any_stretch_over_limit(springs, &p.x, factor, team) {
-            return round;
+            return;
         }
-        // The pins' support (found again only when the pins or the
-        // topology changed).
-        ws.pin_support.update(&p.inv_mass, springs, |i| i, revision);
-        let weight = ws.pin_support.weights(p.inv_mass.len());
-        let weight = weight.unwrap_or(&p.inv_mass);
-        let passes = relaxed_passes(h);
-        limit_stretch_relaxed(springs, weight, (&mut p.x, Some(&mut p.v)), factor, passes);
+        limit_stretch_supported(
+            &mut ws.pin_support,
+            (springs, &p.inv_mass, revision),
+            (&mut p.x, Some(&mut p.v)),
+            factor,
+            relaxed_passes(h),
+        );
         ws.collision
             .project_positions(&mut p.x, &p.inv_mass, obstacles, thickness);
     }
-    ROUNDS
 }

@@ -37,7 +37,7 @@ use super::stability::{
     chains_lengthen, edge_substeps, stable_substep, stable_substeps, unpinned_substeps,
 };
 use super::stage_times::Lap;
-use super::strain_limit::{limit_stretch, limit_stretch_relaxed, relaxed_passes};
+use super::strain_limit::{limit_stretch, limit_stretch_supported, relaxed_passes};
 use super::substep::Substep;
 use super::substeps::Substeps;
 use super::substeps::{self_collision_substeps, MAX_SELF_SUBSTEP};
@@ -283,10 +283,11 @@ impl ClothSolver {
         let relaxed_limit = !self.settings.integrator.limits_stretch_itself()
             && h <= stable_substep(cloth, &self.settings) * (1.0 + 1.0e-4);
         let edges = self.settings.edge_collisions;
+        let limits_itself = self.settings.integrator.limits_stretch_itself();
         // The cloth follows what the contacts pushed (contact_follow.rs)
         // with every integrator, unless an explicit one runs past its
         // stability limit (that run must still diverge and say so).
-        let follows = relaxed_limit || self.settings.integrator.limits_stretch_itself();
+        let follows = relaxed_limit || limits_itself;
         let ws = &mut self.workspace;
         let mut report = StepReport {
             substeps: k,
@@ -411,16 +412,17 @@ impl ClothSolver {
             // (`relaxed_limit`). After the small-steps solver's own limit, a
             // few plain passes take back what self-collision or the tethers
             // moved.
-            let limits_itself = self.settings.integrator.limits_stretch_itself();
             let (factor, revision) = (cloth.material.stretch_limit_factor(), cloth.mass_revision());
             let p = &mut cloth.particles;
             let springs = &cloth.topology.springs;
             if relaxed_limit {
-                ws.pin_support.update(&p.inv_mass, springs, |i| i, revision);
-                let weight = ws.pin_support.weights(p.inv_mass.len());
-                let weight = weight.unwrap_or(&p.inv_mass);
-                let passes = relaxed_passes(h);
-                limit_stretch_relaxed(springs, weight, (&mut p.x, Some(&mut p.v)), factor, passes);
+                limit_stretch_supported(
+                    &mut ws.pin_support,
+                    (springs, &p.inv_mass, revision),
+                    (&mut p.x, Some(&mut p.v)),
+                    factor,
+                    relaxed_passes(h),
+                );
             } else if !limits_itself || self_touching > 0 || tethered {
                 limit_stretch(springs, &p.inv_mass, &mut p.x, Some(&mut p.v), factor);
             }

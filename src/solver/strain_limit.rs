@@ -13,6 +13,7 @@
 //! limits leaves some springs longer than before (measured: a row stretched
 //! 30% and limited to 5% ended with a spring at 53%).
 
+use super::pin_support::PinSupport;
 use crate::cloth::{SpringKind, Springs};
 use crate::collision::{stop_separating, LIMIT_SLACK};
 use crate::math::Vector;
@@ -87,7 +88,7 @@ pub(crate) fn limit_stretch(
 /// (1/kg: the inverse mass, or less near a pin, `pin_support.rs`),
 /// over-relaxed ([`OVER_RELAXATION`]), in up to `passes` passes
 /// ([`RELAXED_PASSES`], or [`relaxed_passes`] by the substep).
-pub(crate) fn limit_stretch_relaxed(
+fn limit_stretch_relaxed(
     springs: &Springs,
     weight: &[f32],
     (x, v): (&mut [Vector], Option<&mut [Vector]>),
@@ -96,6 +97,23 @@ pub(crate) fn limit_stretch_relaxed(
 ) -> u32 {
     let passes = (passes, OVER_RELAXATION);
     limit_passes(springs, weight, x, v, factor, passes)
+}
+
+/// [`limit_stretch_relaxed`] weighted by the pins' `support` for the
+/// particles' inverse masses `inv_mass` (found again only when the cloth's
+/// mass `revision` changed): the limit after a substep of every integrator
+/// that does not hold it itself, of the small-steps solver on a cloth
+/// without a grid plan, and of the cloth following its contacts.
+pub(crate) fn limit_stretch_supported(
+    support: &mut PinSupport,
+    (springs, inv_mass, revision): (&Springs, &[f32], u64),
+    (x, v): (&mut [Vector], Option<&mut [Vector]>),
+    factor: f32,
+    passes: usize,
+) -> u32 {
+    support.update(inv_mass, springs, |i| i, revision);
+    let weight = support.weights(inv_mass.len()).unwrap_or(inv_mass);
+    limit_stretch_relaxed(springs, weight, (x, v), factor, passes)
 }
 
 /// Up to `passes.0` Gauss–Seidel passes of the limit, each spring over it

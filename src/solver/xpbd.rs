@@ -441,11 +441,9 @@ pub(crate) fn step(
             ws.general.store(x);
             // A pinned cloth's limit moves particles near the pins less, as
             // the grid's does (`pin_support.rs`).
-            ws.pin_support.update(w, springs, |i| i, sub.mass_revision);
-            let weight = ws.pin_support.weights(n).unwrap_or(w);
-            strain_limit::limit_stretch_relaxed(
-                springs,
-                weight,
+            strain_limit::limit_stretch_supported(
+                &mut ws.pin_support,
+                (springs, w, sub.mass_revision),
                 (x, None),
                 model.stretch_limit,
                 strain_limit::RELAXED_PASSES,
