@@ -24,10 +24,11 @@ const ON_SURFACE: f32 = 1.0e-6;
 /// The contact of `point` with `shape` at `pose`; `None` only if the shape
 /// cannot answer (non-finite data).
 ///
-/// Balls, cuboids and capsules are answered analytically (the same surface
-/// point as parry's projection, with a normal that stays exact a hair away
-/// from the surface; cuboids and capsules in double precision); every
-/// other shape goes through parry's `project_local_point`.
+/// Balls, cuboids, capsules and cylinders are answered analytically (the
+/// same surface point as parry's projection, with a normal that stays
+/// exact a hair away from the surface; all but balls in double
+/// precision); every other shape goes through parry's
+/// `project_local_point`.
 ///
 /// Degenerate cases get a sensible normal, never NaN: a point at a ball's
 /// centre is pushed out along `+y`; a point exactly on an edge or corner gets
@@ -50,6 +51,8 @@ pub(crate) enum Analytic {
     Cuboid(Vector),
     /// A capsule: its segment's ends (m, in its own frame) and radius (m).
     Capsule(Vector, Vector, f32),
+    /// A cylinder along its own y axis: half height and radius (m).
+    Cylinder(f32, f32),
     /// Any other shape: parry's point projection.
     Other,
 }
@@ -63,6 +66,8 @@ impl Analytic {
             Analytic::Cuboid(cuboid.half_extents)
         } else if let Some(capsule) = shape.as_capsule() {
             Analytic::Capsule(capsule.segment.a, capsule.segment.b, capsule.radius)
+        } else if let Some(cylinder) = shape.as_cylinder() {
+            Analytic::Cylinder(cylinder.half_height, cylinder.radius)
         } else {
             Analytic::Other
         }
@@ -143,6 +148,10 @@ pub(crate) fn contact_prepared(
         Analytic::Cuboid(half) => cuboid_contact(half, pose, point),
         Analytic::Capsule(_, _, radius) => capsule_contact(radius, pose, point)
             .or_else(|| general_contact(shape, &pose.pose, point)),
+        Analytic::Cylinder(half_height, radius) => {
+            cylinder_contact((half_height, radius), pose, point)
+                .or_else(|| general_contact(shape, &pose.pose, point))
+        }
         Analytic::Other => general_contact(shape, &pose.pose, point),
     }
 }
@@ -314,6 +323,42 @@ fn capsule_contact(radius: f32, pose: &PoseF64, point: Vector) -> Option<Contact
     })
 }
 
+/// A cylinder along its own y axis, analytically, in double precision:
+/// outside, the nearest point of its side, of a cap, or of a rim; inside,
+/// of the nearer of the side and the caps (the cap of equals). `None` for
+/// a point on the axis nearer the side than the caps, whose normal is any
+/// direction across the axis (parry's projection then picks one).
+#[inline]
+fn cylinder_contact(
+    (half_height, radius): (f32, f32),
+    pose: &PoseF64,
+    point: Vector,
+) -> Option<Contact> {
+    let local = local_f64(pose, point);
+    let (h, r) = (f64::from(half_height), f64::from(radius));
+    let rho = (local.x * local.x + local.z * local.z).sqrt();
+    let (beyond_side, beyond_cap) = (rho - r, local.y.abs() - h);
+    let up = DVec3::new(0.0, if local.y >= 0.0 { 1.0 } else { -1.0 }, 0.0);
+    // Across the axis towards the point (none on the axis).
+    let across =
+        (rho > f64::from(ON_SURFACE)).then(|| DVec3::new(local.x / rho, 0.0, local.z / rho));
+    let on_side = |across: DVec3| across * r + DVec3::new(0.0, local.y, 0.0);
+    let on_cap = DVec3::new(local.x, up.y * h, local.z);
+    if beyond_side > 0.0 && beyond_cap > 0.0 {
+        // Beyond a rim: its nearest point.
+        let rim = across? * r + up * h;
+        let offset = local - rim;
+        let dist = offset.length();
+        return to_world(pose, rim, offset / dist, dist);
+    }
+    if beyond_cap >= beyond_side {
+        to_world(pose, on_cap, up, beyond_cap)
+    } else {
+        let across = across?;
+        to_world(pose, on_side(across), across, beyond_side)
+    }
+}
+
 /// Outward normal at a local point lying on the surface.
 fn surface_normal(shape: &dyn Shape, local: Vector) -> Option<Vector> {
     use parry3d::shape::ShapeType;
@@ -391,6 +436,52 @@ mod tests {
             }
         }
         assert_eq!(checked, 2 * 343);
+    }
+
+    #[test]
+    fn cylinder_contacts_match_parry_inside_outside_and_at_the_rims() {
+        let cylinder = parry3d::shape::Cylinder::new(0.3, 0.4);
+        let pose = Pose::from_parts(Vector::new(0.3, 1.0, -0.2), Rotation::from_rotation_x(0.7));
+        let shape: &dyn Shape = &cylinder;
+        assert!(matches!(Analytic::of(shape), Analytic::Cylinder(..)));
+        let prepared = PoseF64::placing(&pose, Analytic::of(shape));
+        let (mut inside, mut outside, mut rims) = (0, 0, 0);
+        for i in 0..9 {
+            for j in 0..9 {
+                for k in 0..9 {
+                    let local =
+                        Vector::new(i as f32 - 4.0, j as f32 - 4.0, k as f32 - 4.0) * 0.13 + 0.01;
+                    let p = pose.transform_point(local);
+                    let ours = contact(shape, &pose, p).unwrap();
+                    let parry = general_contact(shape, &pose, p).unwrap();
+                    let d = (ours.signed_distance - parry.signed_distance).abs();
+                    assert!(d < 1e-5, "{p}: {ours:?} against {parry:?}");
+                    assert!((ours.point - parry.point).length() < 1e-5, "{p}");
+                    if parry.signed_distance.abs() > 1e-3 {
+                        assert!(ours.normal.dot(parry.normal) > 0.9999, "{p}");
+                    }
+                    let rho = (local.x * local.x + local.z * local.z).sqrt();
+                    rims += usize::from(rho > 0.4 && local.y.abs() > 0.3);
+                    if parry.signed_distance < 0.0 {
+                        inside += 1;
+                    } else {
+                        outside += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            inside > 20 && outside > 300 && rims > 100,
+            "{inside} inside, {outside} outside, {rims} beyond a rim"
+        );
+        assert!(cylinder_contact((0.3, 0.4), &prepared, pose.translation).is_some());
+        // On the axis of a slender one, nearer the side than the caps:
+        // parry's answer.
+        let slender = parry3d::shape::Cylinder::new(0.5, 0.2);
+        let on_axis = pose.transform_point(Vector::new(0.0, 0.05, 0.0));
+        assert!(cylinder_contact((0.5, 0.2), &prepared, on_axis).is_none());
+        let hit = contact(&slender, &pose, on_axis).unwrap();
+        assert!((hit.signed_distance + 0.2).abs() < 1e-5, "{hit:?}");
     }
 
     #[test]
