@@ -256,3 +256,56 @@ fn with_the_defaults_a_caught_ball_comes_to_rest_on_the_sheet() {
         "ball at {after} floats above the sheet ({lowest})"
     );
 }
+
+/// A round table (rapier cylinders, fixed) and a square cloth dropped on
+/// it with the crate's defaults: the small-steps solver holds a still
+/// cylinder inside its substeps as it holds a cuboid. In every frame the
+/// cloth stretches under 5% and no particle is more than 1 mm inside the
+/// top; it comes to rest on the top, its corners hanging over the rim.
+#[test]
+fn a_tablecloth_dropped_on_a_round_table_drapes_over_it() {
+    let (radius, top, half_height) = (0.45, 0.75, 0.02);
+    let mut world = PhysicsWorld::new();
+    world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(0.0, top - half_height, 0.0)),
+        ColliderBuilder::cylinder(half_height, radius),
+    );
+    world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.36, 0.0)),
+        ColliderBuilder::cylinder(0.36, 0.04),
+    );
+    let mut sim = Simulation::new(
+        ClothBuilder::new(40, 40)
+            .size(1.2, 1.2)
+            .horizontal(Vector::new(0.0, 0.95, 0.0))
+            .material(Material::cotton())
+            .build()
+            .unwrap(),
+    );
+    assert_eq!(sim.solver.settings.integrator, Integrator::Xpbd);
+    // How far a point is inside the top (m; 0 outside).
+    let inside = |p: Vector| {
+        let r = (p.x * p.x + p.z * p.z).sqrt();
+        let dy = half_height - (p.y - (top - half_height)).abs();
+        (radius - r).min(dy).max(0.0)
+    };
+    let (mut worst, mut deepest) = (0.0f32, 0.0f32);
+    for _ in 0..150 {
+        run(&mut sim, &mut world, 1);
+        worst = worst.max(sim.max_strain(SpringKind::Stretch));
+        deepest = sim
+            .positions()
+            .iter()
+            .map(|&p| inside(p))
+            .fold(deepest, f32::max);
+    }
+    assert!(worst < 0.05, "stretched {worst}");
+    assert!(deepest <= 0.001, "{deepest} m inside the top");
+    // Its middle rests on the top; its corners hang down past the rim.
+    let middle = sim.positions()[sim.index(20, 20).unwrap()];
+    assert!((middle.y - top).abs() < 0.02, "middle at {middle}");
+    for (c, r) in [(0, 0), (39, 0), (0, 39), (39, 39)] {
+        let corner = sim.positions()[sim.index(c, r).unwrap()];
+        assert!(corner.y < top - 0.2, "corner ({c}, {r}) at {corner}");
+    }
+}

@@ -34,9 +34,11 @@
 //! the stage ran every second substep for that before, and the state left
 //! the lanes for it (`box` 6.4 → 4.4 ms, bench, one thread).
 
+use crate::collision::contact::{contact_prepared, Analytic, PoseF64};
 use crate::collision::{chords_clear_ball, Obstacle, EDGE_SAMPLES};
 use crate::math::{simd_available, Vector};
 use crate::parallel::{Disjoint, Team};
+use parry3d::shape::Shape;
 
 use super::grid_sweep::{GridPlan, LanePlanes, Lanes};
 
@@ -77,6 +79,10 @@ enum StillShape {
     /// its local axes in the world (unit vectors), half extents (m) and
     /// the thickness (m).
     Cuboid(StillCuboid),
+    /// Any other convex shape (a cylinder, a cone, a convex hull), held
+    /// as a cuboid is, by a plane a lane taken through parry's projection
+    /// ([`StillConvex`]).
+    Convex(StillConvex),
 }
 
 /// Within this share of a capsule's reach from its axis, a lane goes out
@@ -110,6 +116,31 @@ struct StillCuboid {
     slot: usize,
 }
 
+/// A still convex shape other than a ball, capsule, half-space or cuboid
+/// as the lanes take it ([`StillShape::Convex`]): as a cuboid, a lane is
+/// held by the tangent plane of the shape (rounded by the thickness) at
+/// the point nearest to where it started the substep, when it started
+/// within `reach` (m) of the shape. The plane is found once a substep by
+/// the collision stage's contact ([`crate::collision::contact`]), for the lanes
+/// that start inside the box (m) around the shape and its reach only. A
+/// cylinder (a round table, a pole) or a cone went to the collision
+/// stage after every substep before: 70% of a frame of 32 substeps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct StillConvex {
+    /// The obstacle's index among the substep's.
+    obstacle: usize,
+    /// The box (m) a lane that starts within reach of the shape lies in.
+    lo: Vector,
+    hi: Vector,
+    thickness: f32,
+    reach: f32,
+    /// How far (m) within the thickness a lane may start and still be
+    /// put out to it (as [`StillCuboid::settle`]).
+    settle: f32,
+    /// Which of the lanes' plane records is this shape's.
+    slot: usize,
+}
+
 /// The still smooth obstacles of a substep and what the lanes passes
 /// record of them: per lane, how far (m) the passes pushed it this substep
 /// and which obstacle last did (its index plus one, 0 for none).
@@ -119,9 +150,10 @@ pub(crate) struct LaneContacts {
     friction: Vec<f32>,
     depth: Vec<f32>,
     touch: Vec<u32>,
-    /// Per cuboid, per lane: the plane that holds the lane this substep
-    /// (unit normal x, y, z and offset, m; an offset of −∞ for none), in
-    /// the cuboid's slot of `lanes` entries ([`Self::take_planes`]).
+    /// Per cuboid or other convex shape, per lane: the plane that holds
+    /// the lane this substep (unit normal x, y, z and offset, m; an offset
+    /// of −∞ for none), in the shape's slot of `lanes` entries
+    /// ([`Self::take_planes`]).
     planes: [Vec<f32>; 4],
     /// Lanes of the substep.
     lanes: usize,
@@ -134,7 +166,9 @@ pub(crate) struct LaneContacts {
 impl LaneContacts {
     /// Whether every obstacle is one the lanes may hold, whatever the
     /// motion (none counts: nothing to hold): still (no rapier body, no
-    /// velocity), a ball, a capsule, a half-space or a cuboid.
+    /// velocity), a ball, a capsule, a half-space, a cuboid or another
+    /// shape parry knows to be convex (a cylinder, a cone, a convex hull;
+    /// not a triangle mesh, a heightfield or a compound).
     pub fn may_hold(obstacles: &[Obstacle]) -> bool {
         obstacles.iter().all(|o| {
             let shape = &o.shape;
@@ -142,7 +176,8 @@ impl LaneContacts {
                 && (shape.as_ball().is_some()
                     || shape.as_capsule().is_some()
                     || shape.as_halfspace().is_some()
-                    || shape.as_cuboid().is_some())
+                    || shape.as_cuboid().is_some()
+                    || shape.is_convex())
         })
     }
 
@@ -152,19 +187,24 @@ impl LaneContacts {
     /// velocity) and a half-space, or a ball or capsule of a radius or a
     /// cuboid of half extents over [`BALL_MOTIONS`] times `motion` (a particle is
     /// put back through the nearest face, which must be the one it came
-    /// in by). The collision stage then need not run after a substep but
-    /// the last.
+    /// in by), or another convex shape whose own box's half extents are
+    /// (a triangle, flat, is not held). The collision stage then need not
+    /// run after a substep but the last.
     pub fn holds(obstacles: &[Obstacle], motion: f32) -> bool {
         let deep = BALL_MOTIONS * motion;
         !obstacles.is_empty()
             && Self::may_hold(obstacles)
             && obstacles.iter().all(|o| {
                 let shape = &o.shape;
-                shape.as_ball().is_none_or(|ball| ball.radius > deep)
-                    && shape.as_capsule().is_none_or(|c| c.radius > deep)
-                    && shape
-                        .as_cuboid()
-                        .is_none_or(|c| c.half_extents.min_element() > deep)
+                match (shape.as_ball(), shape.as_capsule(), shape.as_cuboid()) {
+                    (Some(ball), _, _) => ball.radius > deep,
+                    (_, Some(capsule), _) => capsule.radius > deep,
+                    (_, _, Some(cuboid)) => cuboid.half_extents.min_element() > deep,
+                    _ => {
+                        shape.as_halfspace().is_some()
+                            || shape.compute_local_aabb().half_extents().min_element() > deep
+                    }
+                }
             })
     }
 
@@ -201,7 +241,7 @@ impl LaneContacts {
                     }
                 }
                 (None, None, Some(cuboid)) => StillShape::Cuboid(StillCuboid {
-                    slot: self.cuboids(),
+                    slot: self.slots(),
                     centre: o.pose.translation,
                     axes: [Vector::X, Vector::Y, Vector::Z]
                         .map(|axis| (o.pose.rotation * axis).normalize()),
@@ -212,8 +252,6 @@ impl LaneContacts {
                     reach: 2.0 * (thickness + motion),
                     settle: SETTLE_SHARE * thickness,
                 }),
-                // `holds` took only balls, capsules, half-spaces and cuboids; should
-                // it take another shape one day, this one is not held.
                 (None, None, None) => match o.shape.as_capsule() {
                     Some(capsule) => {
                         let [a, b] = [capsule.segment.a, capsule.segment.b]
@@ -233,10 +271,20 @@ impl LaneContacts {
                             reach: capsule.radius + thickness,
                         }
                     }
+                    // Another convex shape (`holds` took no other).
                     None => {
-                        self.shapes.clear();
-                        self.friction.clear();
-                        return false;
+                        let reach = 2.0 * (thickness + motion);
+                        let pad = Vector::splat(reach);
+                        let aabb = o.shape.compute_aabb(&o.pose);
+                        StillShape::Convex(StillConvex {
+                            obstacle: self.shapes.len(),
+                            lo: aabb.mins - pad,
+                            hi: aabb.maxs + pad,
+                            thickness,
+                            reach,
+                            settle: SETTLE_SHARE * thickness,
+                            slot: self.slots(),
+                        })
                     }
                 },
             };
@@ -248,7 +296,7 @@ impl LaneContacts {
         self.touch.clear();
         self.touch.resize(n, 0);
         self.lanes = n;
-        let slots = self.cuboids();
+        let slots = self.slots();
         for record in &mut self.planes {
             record.clear();
             record.resize(slots * n, 0.0);
@@ -256,11 +304,12 @@ impl LaneContacts {
         true
     }
 
-    /// Each cuboid's plane for every lane, from where the lanes start the
-    /// substep (`lanes`' start positions, m): the tangent plane of the
-    /// rounded cuboid at the point nearest to the start ([`cuboid_plane`]).
-    /// Once a substep, after [`Self::begin`] and before the passes.
-    pub fn take_planes(&mut self, lanes: &mut Lanes, team: Team) {
+    /// Each cuboid's and other convex shape's plane for every lane, from
+    /// where the lanes start the substep (`lanes`' start positions, m):
+    /// the tangent plane of the rounded shape at the point nearest to the
+    /// start ([`cuboid_plane`], [`convex_plane`]). Once a substep, after
+    /// [`Self::begin`] with the same `obstacles` and before the passes.
+    pub fn take_planes(&mut self, obstacles: &[Obstacle], lanes: &mut Lanes, team: Team) {
         let n = self.lanes;
         let [_, _, _, sx, sy, sz, _] = lanes.disjoint();
         if sx.len() != n {
@@ -268,10 +317,12 @@ impl LaneContacts {
         }
         let simd = simd_available();
         for shape in &self.shapes {
-            let StillShape::Cuboid(cuboid) = *shape else {
-                continue;
+            let (slot, cuboid) = match *shape {
+                StillShape::Cuboid(cuboid) => (cuboid.slot, Some(cuboid)),
+                StillShape::Convex(convex) => (convex.slot, None),
+                _ => continue,
             };
-            let slot = cuboid.slot * n..(cuboid.slot + 1) * n;
+            let slot = slot * n..(slot + 1) * n;
             let [nx, ny, nz, offset] = self
                 .planes
                 .each_mut()
@@ -285,7 +336,13 @@ impl LaneContacts {
                         [nx, ny, nz, offset].map(|a| a.range(range.clone())),
                     )
                 };
-                planes_of(&cuboid, start, &mut out, simd);
+                match (cuboid, *shape) {
+                    (Some(cuboid), _) => planes_of(&cuboid, start, &mut out, simd),
+                    (None, StillShape::Convex(convex)) => {
+                        convex_planes_of(&convex, &obstacles[convex.obstacle], start, &mut out)
+                    }
+                    _ => {}
+                }
                 0.0
             });
         }
@@ -356,27 +413,27 @@ impl LaneContacts {
         farthest
     }
 
-    /// The planes of the lanes' cuboids ([`Self::take_planes`]), when they
-    /// hold one or more this substep.
-    pub fn cuboid_planes(&self) -> Option<LanePlanes<'_>> {
-        self.holds_cuboid().then(|| LanePlanes {
+    /// The planes of the lanes' cuboids and other convex shapes
+    /// ([`Self::take_planes`]), when they hold one or more this substep.
+    pub fn held_planes(&self) -> Option<LanePlanes<'_>> {
+        (self.slots() > 0).then(|| LanePlanes {
             arrays: self.planes.each_ref().map(|r| &r[..]),
-            slots: self.cuboids(),
+            slots: self.slots(),
             lanes: self.lanes,
         })
     }
 
     /// Whether the lanes hold a cuboid this substep.
     pub fn holds_cuboid(&self) -> bool {
-        self.cuboids() > 0
-    }
-
-    /// How many cuboids the lanes hold (each its slot of plane records).
-    fn cuboids(&self) -> usize {
         self.shapes
             .iter()
-            .filter(|s| matches!(s, StillShape::Cuboid(_)))
-            .count()
+            .any(|s| matches!(s, StillShape::Cuboid(_)))
+    }
+
+    /// How many cuboids and other convex shapes the lanes hold (each its
+    /// slot of plane records).
+    fn slots(&self) -> usize {
+        self.shapes.iter().filter(|s| s.slot().is_some()).count()
     }
 
     /// Whether there is anything to hold this substep.
@@ -495,10 +552,10 @@ impl Law<'_> {
         let len = po.len();
         assert!([px.len(), py.len(), pz.len()] == [len; 3]);
         for shape in self.shapes {
-            if let StillShape::Cuboid(cuboid) = shape {
+            if let Some(slot) = shape.slot() {
                 assert!(
-                    cuboid.slot * self.lanes + end <= len,
-                    "a cuboid's planes for its lanes"
+                    slot * self.lanes + end <= len,
+                    "a held shape's planes for its lanes"
                 );
             }
         }
@@ -669,11 +726,12 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
                 inside = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(gap, zero), free);
                 push = _mm256_and_ps(inside, gap);
             }
-            StillShape::Cuboid(cuboid) => {
+            StillShape::Cuboid(StillCuboid { slot, .. })
+            | StillShape::Convex(StillConvex { slot, .. }) => {
                 // This lane's plane, taken at the substep's start.
                 // SAFETY: within every plane array, checked once a chunk
                 // (`Law::check_planes`).
-                let at = cuboid.slot * law.lanes + c.first + k;
+                let at = slot * law.lanes + c.first + k;
                 let [px, py, pz, po] = law.planes;
                 debug_assert!(
                     at + W <= po.len() && [px.len(), py.len(), pz.len()] == [po.len(); 3]
@@ -1007,7 +1065,8 @@ impl Eight {
     fn half_space(&self, law: &Law, shape: StillShape, k: usize) -> ([f32; 3], f32) {
         match shape {
             StillShape::Plane { normal, offset } => ([normal.x, normal.y, normal.z], offset),
-            StillShape::Cuboid(cuboid) => self.plane(law, cuboid.slot, k),
+            StillShape::Cuboid(StillCuboid { slot, .. })
+            | StillShape::Convex(StillConvex { slot, .. }) => self.plane(law, slot, k),
             StillShape::Ball { .. } | StillShape::Capsule { .. } => ([0.0; 3], f32::NEG_INFINITY),
         }
     }
@@ -1123,9 +1182,10 @@ fn maybe_inside(e: &Eight, law: &Law) -> bool {
                     any |= offset - (m.x * p[0][k] + m.y * p[1][k] + m.z * p[2][k]) > 0.0;
                 }
             }
-            StillShape::Cuboid(cuboid) => {
+            StillShape::Cuboid(StillCuboid { slot, .. })
+            | StillShape::Convex(StillConvex { slot, .. }) => {
                 for k in 0..W {
-                    let (m, offset) = e.plane(law, cuboid.slot, k);
+                    let (m, offset) = e.plane(law, slot, k);
                     any |= offset - (m[0] * e.p[0][k] + m[1] * e.p[1][k] + m[2] * e.p[2][k]) > 0.0;
                 }
             }
@@ -1154,7 +1214,18 @@ impl StillShape {
                     from.z + axis.z * t,
                 ]
             }
-            StillShape::Plane { .. } | StillShape::Cuboid(_) => [0.0; 3],
+            StillShape::Plane { .. } | StillShape::Cuboid(_) | StillShape::Convex(_) => [0.0; 3],
+        }
+    }
+
+    /// The slot of the lanes' plane records of a cuboid or other convex
+    /// shape; none for the shapes held without planes.
+    #[inline(always)]
+    fn slot(&self) -> Option<usize> {
+        match *self {
+            StillShape::Cuboid(StillCuboid { slot, .. })
+            | StillShape::Convex(StillConvex { slot, .. }) => Some(slot),
+            _ => None,
         }
     }
 
@@ -1451,6 +1522,70 @@ fn planes_of(cuboid: &StillCuboid, start: [&[f32]; 3], out: &mut [&mut [f32]; 4]
     }
 }
 
+/// The plane (unit normal, offset in m) that holds a lane starting the
+/// substep at `start` (m) against the convex shape of `obstacle`, as
+/// [`cuboid_plane`] takes a cuboid's: the tangent plane of the shape
+/// rounded by the thickness at the point nearest to `start` (the
+/// collision stage's contact: a cylinder's analytic, any other shape's
+/// through parry's projection), when `start` is within the shape's reach; otherwise none
+/// (an offset of −∞). The shape is convex: a lane on its plane's side is
+/// outside it.
+#[inline(always)]
+fn convex_plane(
+    convex: &StillConvex,
+    (shape, analytic, pose): (&dyn Shape, Analytic, &PoseF64),
+    start: [f32; 3],
+) -> ([f32; 3], f32) {
+    let none = ([0.0; 3], f32::NEG_INFINITY);
+    let s = Vector::from(start);
+    if !(s.cmpge(convex.lo).all() && s.cmple(convex.hi).all()) {
+        return none;
+    }
+    let Some(hit) = contact_prepared(shape, analytic, pose, s) else {
+        return none;
+    };
+    if hit.signed_distance >= convex.reach {
+        return none;
+    }
+    let normal = hit.normal;
+    let offset = normal.dot(hit.point) + convex.thickness;
+    let from = normal.dot(s);
+    // Deep within the thickness: held where it starts (`cuboid_plane`).
+    let offset = if from < offset - convex.settle {
+        from
+    } else {
+        offset
+    };
+    (normal.to_array(), offset)
+}
+
+/// The planes of the convex shape of `obstacle` ([`convex_plane`]) for
+/// lanes starting at `start`, into `out` (normal x, y, z, offset).
+fn convex_planes_of(
+    convex: &StillConvex,
+    obstacle: &Obstacle,
+    start: [&[f32]; 3],
+    out: &mut [&mut [f32]; 4],
+) {
+    let n = start[0].len();
+    assert!(start.iter().all(|s| s.len() == n) && out.iter().all(|o| o.len() == n));
+    // The shape's kind and pose read once (a downcast through `dyn Shape`).
+    let shape = &*obstacle.shape;
+    let analytic = Analytic::of(shape);
+    let pose = PoseF64::placing(&obstacle.pose, analytic);
+    for k in 0..n {
+        let (normal, offset) = convex_plane(
+            convex,
+            (shape, analytic, &pose),
+            [start[0][k], start[1][k], start[2][k]],
+        );
+        for a in 0..3 {
+            out[a][k] = normal[a];
+        }
+        out[3][k] = offset;
+    }
+}
+
 /// A squared distance from a ball's centre under which a lane may be
 /// inside it, `reach` (m) out: the square of `reach` with a margin for the
 /// rounding of a squared distance (never under it where the exact test,
@@ -1501,7 +1636,7 @@ fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
                     push[k] = if inside[k] { reach - length } else { 0.0 };
                 }
             }
-            StillShape::Plane { .. } | StillShape::Cuboid(_) => {
+            StillShape::Plane { .. } | StillShape::Cuboid(_) | StillShape::Convex(_) => {
                 for k in 0..W {
                     let (m, offset) = e.half_space(law, shape, k);
                     let gap = offset - (m[0] * e.p[0][k] + m[1] * e.p[1][k] + m[2] * e.p[2][k]);
@@ -1569,7 +1704,7 @@ fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::collision::contact::{contact_prepared, Analytic, PoseF64};
+    use crate::collision::contact::contact;
     use crate::collision::DynamicBody;
     use crate::math::Pose;
     use parry3d::shape::SharedShape;
@@ -1853,7 +1988,7 @@ mod tests {
     /// and no ball, capsule or cuboid the substep's motion could carry a
     /// particle far into.
     #[test]
-    fn the_lanes_hold_still_balls_capsules_planes_and_cuboids_only() {
+    fn the_lanes_hold_still_convex_shapes_only() {
         let [ball, floor] = ball_and_floor();
         assert!(LaneContacts::holds(&[ball.clone(), floor.clone()], 0.01));
         assert!(!LaneContacts::holds(&[], 0.01), "nothing to hold");
@@ -1887,15 +2022,49 @@ mod tests {
             !LaneContacts::holds(&[ball.clone(), capsule], 0.03),
             "a 10 cm bar the motion could carry a particle through"
         );
+        // Other convex shapes by their own box's half extents.
         let cylinder = Obstacle::new(SharedShape::cylinder(0.5, 0.1), Pose::IDENTITY);
-        assert!(!LaneContacts::holds(&[ball, cylinder.clone()], 0.001));
+        assert!(LaneContacts::holds(
+            &[ball.clone(), cylinder.clone()],
+            0.001
+        ));
+        assert!(
+            !LaneContacts::holds(&[ball.clone(), cylinder], 0.03),
+            "a 10 cm rod the motion could carry a particle through"
+        );
+        let cone = Obstacle::new(SharedShape::cone(0.2, 0.15), Pose::IDENTITY);
+        assert!(LaneContacts::holds(std::slice::from_ref(&cone), 0.001));
+        let triangle = Obstacle::new(
+            SharedShape::triangle(Vector::ZERO, Vector::X, Vector::Z),
+            Pose::IDENTITY,
+        );
+        assert!(
+            LaneContacts::may_hold(std::slice::from_ref(&triangle))
+                && !LaneContacts::holds(std::slice::from_ref(&triangle), 0.001),
+            "a triangle is flat"
+        );
+        // Not convex: a mesh of two triangles.
+        let mesh = Obstacle::new(
+            SharedShape::trimesh(
+                vec![
+                    Vector::ZERO,
+                    Vector::X,
+                    Vector::Z,
+                    Vector::new(1.0, 0.5, 1.0),
+                ],
+                vec![[0, 1, 2], [1, 3, 2]],
+            )
+            .expect("a mesh"),
+            Pose::IDENTITY,
+        );
+        assert!(!LaneContacts::may_hold(&[ball, mesh.clone()]));
         // What it holds it holds whole, or nothing.
         let mut contacts = LaneContacts::default();
         assert!(
             contacts.begin(std::slice::from_ref(&floor), (THICKNESS, 0.01), 4)
                 && !contacts.is_empty()
         );
-        assert!(!contacts.begin(&[floor, cylinder], (THICKNESS, 0.01), 4) && contacts.is_empty());
+        assert!(!contacts.begin(&[floor, mesh], (THICKNESS, 0.01), 4) && contacts.is_empty());
         assert_eq!(contacts.touching(), 0, "nothing held, nothing touching");
     }
 
@@ -2021,7 +2190,7 @@ mod tests {
         assert!(contacts.holds_cuboid());
         let mut l = place();
         let before = bits(&mut l);
-        contacts.take_planes(&mut l, Team::ALONE);
+        contacts.take_planes(std::slice::from_ref(&table), &mut l, Team::ALONE);
         contacts.project(&mut l, Team::ALONE);
         let [x, y, z, sx, sy, sz, w] = l.arrays_mut();
         let (mut held, mut far, mut inside) = (0, 0, 0);
@@ -2080,6 +2249,107 @@ mod tests {
             planes_of(&cuboid, [&*sx, &*sy, &*sz], &mut out, false);
         }
         assert_eq!(portable.planes, contacts.planes, "the planes' bits");
+        portable_pass(&mut portable, &mut m, false);
+        assert_eq!(bits(&mut m), bits(&mut l));
+        contacts.project_with_friction(&mut l, Team::ALONE);
+        portable_pass(&mut portable, &mut m, true);
+        assert_eq!(bits(&mut m), bits(&mut l));
+        assert_eq!(
+            (&portable.depth, &portable.touch),
+            (&contacts.depth, &contacts.touch)
+        );
+    }
+
+    /// A turned cylinder and a cone beside it, and lanes that start around
+    /// and in them and move 3 mm in a substep: each free lane that starts
+    /// within a shape's reach ends outside it by the thickness, or, having
+    /// started within the thickness, no deeper than it started (the planes
+    /// are tangent planes of convex shapes); lanes starting beyond every
+    /// reach and pinned lanes keep their bits; the vector and the portable
+    /// passes agree to the bit.
+    #[test]
+    fn a_convex_shapes_planes_put_the_lanes_out_by_the_thickness() {
+        let turn = glam::Quat::from_rotation_z(0.4) * glam::Quat::from_rotation_x(0.3);
+        let obstacles = [
+            Obstacle::new(
+                SharedShape::cylinder(0.3, 0.25),
+                Pose::from_parts(Vector::new(0.0, 1.0, 0.0), turn),
+            )
+            .with_friction(0.5),
+            Obstacle::new(
+                SharedShape::cone(0.2, 0.15),
+                Pose::from_translation(Vector::new(0.8, 1.0, 0.0)),
+            ),
+        ];
+        let n = 2 * CHUNK + 11;
+        let motion = 0.003;
+        let place = || {
+            placed(n, |k| {
+                let s = k as f32;
+                // Around one shape or the other, from 0.3 m inside its
+                // origin out to its surface grown by up to 5 cm.
+                let o = &obstacles[k % 2];
+                let dir =
+                    Vector::new((1.3 * s).sin(), (0.7 * s).cos(), (2.1 * s).sin()).normalize();
+                let origin = o.pose.translation;
+                let surface = contact(&*o.shape, &o.pose, origin + dir)
+                    .expect("a contact")
+                    .point;
+                let r = 0.7 + 0.45 * ((0.37 * s) % 1.0);
+                let start = origin
+                    + (surface - origin) * r.min(1.0)
+                    + dir * (0.05 * (r - 1.0).max(0.0) / 0.15);
+                let moved = start - dir * motion;
+                (moved, start, if k % 5 == 0 { 0.0 } else { 1.0 })
+            })
+        };
+        let mut contacts = LaneContacts::default();
+        assert!(contacts.begin(&obstacles, (THICKNESS, motion), n));
+        assert!(!contacts.holds_cuboid() && contacts.held_planes().is_some());
+        let mut l = place();
+        let before = bits(&mut l);
+        contacts.take_planes(&obstacles, &mut l, Team::ALONE);
+        contacts.project(&mut l, Team::ALONE);
+        let [x, y, z, sx, sy, sz, w] = l.arrays_mut();
+        let (mut held, mut far, mut inside) = (0, 0, 0);
+        for k in 0..n {
+            let p = Vector::new(x[k], y[k], z[k]);
+            let start = Vector::new(sx[k], sy[k], sz[k]);
+            let old = position_in(&before, n, k);
+            let hits = obstacles
+                .each_ref()
+                .map(|o| contact(&*o.shape, &o.pose, start).expect("a contact"));
+            let reach = 2.0 * (THICKNESS + motion);
+            let beyond = hits.iter().all(|h| h.signed_distance > reach + 1e-4);
+            if w[k] == 0.0 || beyond {
+                assert_eq!(p, old, "lane {k} moved");
+                far += usize::from(beyond);
+                continue;
+            }
+            for (o, hit) in obstacles.iter().zip(&hits) {
+                if hit.signed_distance >= reach - 1e-4 {
+                    continue;
+                }
+                held += 1;
+                let out = contact(&*o.shape, &o.pose, p).expect("a contact");
+                let floor = hit.signed_distance.min(THICKNESS);
+                assert!(
+                    out.signed_distance > floor - 1e-4,
+                    "lane {k} from {start:?} ({}) ends {} from its shape",
+                    hit.signed_distance,
+                    out.signed_distance
+                );
+                inside += usize::from(hit.signed_distance < 0.0);
+            }
+        }
+        assert!(
+            held > n / 3 && far > n / 10 && inside > n / 10,
+            "{held} held, {far} beyond, {inside} started inside"
+        );
+        let mut portable = LaneContacts::default();
+        portable.begin(&obstacles, (THICKNESS, motion), n);
+        let mut m = place();
+        portable.take_planes(&obstacles, &mut m, Team::ALONE);
         portable_pass(&mut portable, &mut m, false);
         assert_eq!(bits(&mut m), bits(&mut l));
         contacts.project_with_friction(&mut l, Team::ALONE);

@@ -286,7 +286,7 @@ pub(crate) fn step(
             let contacts = &mut ws.lane_contacts;
             let held = contacts.begin(sub.obstacles, (sub.ctx.thickness, motion), n);
             if held {
-                contacts.take_planes(l, team);
+                contacts.take_planes(sub.obstacles, l, team);
             }
             // The contacts inside the substep: after the chains and each
             // sweep, every particle with a plane is put back onto it.
@@ -340,7 +340,7 @@ pub(crate) fn step(
             }
             // The limit puts each lane it moves back onto its cuboids'
             // planes at once (`hold_limit`).
-            let cuboids = contacts.cuboid_planes();
+            let cuboids = contacts.held_planes();
             let room = hold_limit(plan, l, (model.stretch_limit, cuboids), team);
             let room = hold_planes((planes, lane), plan, l, (model.stretch_limit, room), team);
             // At the step's last substep the lanes' contacts win over the
