@@ -34,13 +34,12 @@
 //! the stage ran every second substep for that before, and the state left
 //! the lanes for it (`box` 6.4 → 4.4 ms, bench, one thread).
 
-use crate::collision::contact::{contact_prepared, Analytic, PoseF64};
 use crate::collision::{chords_clear_ball, Obstacle, EDGE_SAMPLES};
 use crate::math::{simd_available, Vector};
 use crate::parallel::{Disjoint, Team};
-use parry3d::shape::Shape;
 
 use super::grid_sweep::{GridPlan, LanePlanes, Lanes};
+use super::lane_convex::{convex_planes_of, HullFaces, StillConvex};
 
 /// Lanes per chunk of a pass, a chunk to a thread.
 const CHUNK: usize = 2048;
@@ -80,8 +79,7 @@ enum StillShape {
     /// the thickness (m).
     Cuboid(StillCuboid),
     /// Any other convex shape (a cylinder, a cone, a convex hull), held
-    /// as a cuboid is, by a plane a lane taken through parry's projection
-    /// ([`StillConvex`]).
+    /// as a cuboid is, by a plane a lane (`lane_convex.rs`).
     Convex(StillConvex),
 }
 
@@ -114,165 +112,6 @@ struct StillCuboid {
     settle: f32,
     /// Which of the lanes' plane records is this cuboid's.
     slot: usize,
-}
-
-/// A still convex shape other than a ball, capsule, half-space or cuboid
-/// as the lanes take it ([`StillShape::Convex`]): as a cuboid, a lane is
-/// held by the tangent plane of the shape (rounded by the thickness) at
-/// the point nearest to where it started the substep, when it started
-/// within `reach` (m) of the shape. The plane is found once a substep by
-/// the collision stage's contact ([`crate::collision::contact`]), for the lanes
-/// that start inside the box (m) around the shape and its reach only. A
-/// cylinder (a round table, a pole) or a cone went to the collision
-/// stage after every substep before: 70% of a frame of 32 substeps.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct StillConvex {
-    /// The obstacle's index among the substep's.
-    obstacle: usize,
-    /// The box (m) a lane that starts within reach of the shape lies in.
-    lo: Vector,
-    hi: Vector,
-    thickness: f32,
-    reach: f32,
-    /// How far (m) within the thickness a lane may start and still be
-    /// put out to it (as [`StillCuboid::settle`]).
-    settle: f32,
-    /// Which of the lanes' plane records is this shape's.
-    slot: usize,
-    /// A cylinder's own, found without the stage's contact.
-    cylinder: Option<StillCylinder>,
-    /// A convex hull's faces in [`HullFaces`] (a range of them).
-    hull: Option<(u32, u32)>,
-}
-
-/// The faces of the still convex hulls the lanes hold, in the world,
-/// found at [`LaneContacts::begin`]: a lane whose start projects onto the
-/// face it is farthest beyond (or is inside the hull) takes that face's
-/// plane, without parry's projection on a support map (iterative, and
-/// inside the hull by its expanding polytope): a cloth on a hull's faces
-/// took 5 times a cuboid's time a frame so.
-#[derive(Debug, Default)]
-struct HullFaces {
-    /// Per face: outward unit normal and offset (m; the face lies in
-    /// `normal · x = offset`).
-    normal: Vec<Vector>,
-    offset: Vec<f32>,
-    /// Per face: the range of its edges.
-    edges: Vec<(u32, u32)>,
-    /// Per edge of a face: the unit vector in the face's plane square to
-    /// the edge, into the face, and its offset (m): a point of the plane
-    /// lies in the face where `edge_normal · x ≥ edge_offset` for all its
-    /// edges.
-    edge_normal: Vec<Vector>,
-    edge_offset: Vec<f32>,
-}
-
-impl HullFaces {
-    /// Forgets every hull.
-    fn clear(&mut self) {
-        self.normal.clear();
-        self.offset.clear();
-        self.edges.clear();
-        self.edge_normal.clear();
-        self.edge_offset.clear();
-    }
-
-    /// Adds the faces of `hull` placed at `pose`; returns their range, or
-    /// none for a hull with a face of fewer than three corners or of no
-    /// area (its lanes' planes then all come from the stage's contact).
-    fn add(
-        &mut self,
-        hull: &parry3d::shape::ConvexPolyhedron,
-        pose: &crate::math::Pose,
-    ) -> Option<(u32, u32)> {
-        let (first, first_edge) = (self.normal.len(), self.edge_normal.len());
-        let points = hull.points();
-        let adjacent = hull.vertices_adj_to_face();
-        for face in hull.faces() {
-            let range = face.first_vertex_or_edge as usize
-                ..(face.first_vertex_or_edge + face.num_vertices_or_edges) as usize;
-            let corners = adjacent.get(range)?;
-            let corner =
-                |k: usize| pose.transform_point(points[corners[k % corners.len()] as usize]);
-            let normal = (pose.rotation * face.normal).normalize();
-            if corners.len() < 3 || !normal.is_finite() {
-                self.truncate(first, first_edge);
-                return None;
-            }
-            // Which way the corners turn about the normal.
-            let turn = (0..corners.len())
-                .map(|k| {
-                    (corner(k + 1) - corner(k))
-                        .cross(corner(k + 2) - corner(k + 1))
-                        .dot(normal)
-                })
-                .sum::<f32>()
-                .signum();
-            let edges = self.edge_normal.len() as u32;
-            for k in 0..corners.len() {
-                let (a, b) = (corner(k), corner(k + 1));
-                let inward = (normal.cross(b - a) * turn).normalize();
-                if !inward.is_finite() || turn == 0.0 {
-                    self.truncate(first, first_edge);
-                    return None;
-                }
-                self.edge_normal.push(inward);
-                self.edge_offset.push(inward.dot(a));
-            }
-            self.normal.push(normal);
-            self.offset.push(normal.dot(corner(0)));
-            self.edges.push((edges, self.edge_normal.len() as u32));
-        }
-        Some((first as u32, self.normal.len() as u32))
-    }
-
-    /// Back to `faces` faces and `edges` edges.
-    fn truncate(&mut self, faces: usize, edges: usize) {
-        self.normal.truncate(faces);
-        self.offset.truncate(faces);
-        self.edges.truncate(faces);
-        self.edge_normal.truncate(edges);
-        self.edge_offset.truncate(edges);
-    }
-
-    /// For a point `s` (m): the face of `faces` it is farthest beyond
-    /// (least far inside), as its outward normal, its offset and how far
-    /// beyond it `s` is (m, negative inside), when that face's plane holds
-    /// the point of the hull nearest `s`: `s` inside the hull, or its
-    /// projection onto the face within the face. Otherwise none (`s`
-    /// nearest an edge or a corner).
-    #[inline]
-    fn nearest_face(&self, (first, end): (u32, u32), s: Vector) -> Option<(Vector, f32, f32)> {
-        let (mut best, mut beyond) = (first as usize, f32::NEG_INFINITY);
-        for f in first as usize..end as usize {
-            let d = self.normal[f].dot(s) - self.offset[f];
-            if d > beyond {
-                (best, beyond) = (f, d);
-            }
-        }
-        if beyond > 0.0 {
-            let q = s - self.normal[best] * beyond;
-            let (a, b) = self.edges[best];
-            for e in a as usize..b as usize {
-                if self.edge_normal[e].dot(q) < self.edge_offset[e] - 1.0e-6 {
-                    return None;
-                }
-            }
-        }
-        Some((self.normal[best], self.offset[best], beyond))
-    }
-}
-
-/// A still cylinder as [`cylinder_plane`] takes it: centre (m), the unit
-/// vector along its axis, half height and radius (m). Its planes in single
-/// precision, without a rotation there and back: the round table's planes
-/// through the stage's contact (double precision) were 40% of its frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct StillCylinder {
-    centre: Vector,
-    axis: Vector,
-    half_height: f32,
-    radius: f32,
 }
 
 /// The still smooth obstacles of a substep and what the lanes passes
@@ -410,30 +249,13 @@ impl LaneContacts {
                     }
                     // Another convex shape (`holds` took no other).
                     None => {
-                        let reach = 2.0 * (thickness + motion);
-                        let pad = Vector::splat(reach);
-                        let aabb = o.shape.compute_aabb(&o.pose);
-                        let cylinder = o.shape.as_cylinder().map(|c| StillCylinder {
-                            centre: o.pose.translation,
-                            axis: (o.pose.rotation * Vector::Y).normalize(),
-                            half_height: c.half_height,
-                            radius: c.radius,
-                        });
-                        let hull = o
-                            .shape
-                            .as_convex_polyhedron()
-                            .and_then(|hull| self.hulls.add(hull, &o.pose));
-                        StillShape::Convex(StillConvex {
-                            cylinder,
-                            hull,
-                            obstacle: self.shapes.len(),
-                            lo: aabb.mins - pad,
-                            hi: aabb.maxs + pad,
-                            thickness,
-                            reach,
-                            settle: SETTLE_SHARE * thickness,
-                            slot: self.slots(),
-                        })
+                        let slot = self.slots();
+                        let (index, settle) = (self.shapes.len(), SETTLE_SHARE * thickness);
+                        StillShape::Convex(StillConvex::new(
+                            (o, index, slot),
+                            (thickness, motion, settle),
+                            &mut self.hulls,
+                        ))
                     }
                 },
             };
@@ -1679,151 +1501,6 @@ fn planes_of(cuboid: &StillCuboid, start: [&[f32]; 3], out: &mut [&mut [f32]; 4]
     }
 }
 
-/// The plane (unit normal, offset in m) that holds a lane starting the
-/// substep at `start` (m) against the convex shape of `obstacle`, as
-/// [`cuboid_plane`] takes a cuboid's: the tangent plane of the shape
-/// rounded by the thickness at the point nearest to `start` (the
-/// collision stage's contact: a cylinder's analytic, any other shape's
-/// through parry's projection), when `start` is within the shape's reach; otherwise none
-/// (an offset of −∞). The shape is convex: a lane on its plane's side is
-/// outside it.
-#[inline(always)]
-fn convex_plane(
-    convex: &StillConvex,
-    (shape, analytic, pose): (&dyn Shape, Analytic, &PoseF64),
-    start: [f32; 3],
-) -> ([f32; 3], f32) {
-    let none = ([0.0; 3], f32::NEG_INFINITY);
-    let s = Vector::from(start);
-    if !(s.cmpge(convex.lo).all() && s.cmple(convex.hi).all()) {
-        return none;
-    }
-    let Some(hit) = contact_prepared(shape, analytic, pose, s) else {
-        return none;
-    };
-    if hit.signed_distance >= convex.reach {
-        return none;
-    }
-    let normal = hit.normal;
-    let offset = normal.dot(hit.point) + convex.thickness;
-    let from = normal.dot(s);
-    // Deep within the thickness: held where it starts (`cuboid_plane`).
-    let offset = if from < offset - convex.settle {
-        from
-    } else {
-        offset
-    };
-    (normal.to_array(), offset)
-}
-
-/// [`convex_plane`] of a cylinder, in single precision: the tangent plane
-/// at the nearest point of its side, of a cap or of a rim (inside, of the
-/// nearer of side and caps, as the stage's contact takes it), moved out
-/// by the thickness. A lane on the axis nearer the side than the caps
-/// (deep inside: held where it starts) goes out along any direction
-/// across the axis.
-#[inline(always)]
-fn cylinder_plane(convex: &StillConvex, c: &StillCylinder, start: [f32; 3]) -> ([f32; 3], f32) {
-    let none = ([0.0; 3], f32::NEG_INFINITY);
-    let s = Vector::from(start);
-    if !(s.cmpge(convex.lo).all() && s.cmple(convex.hi).all()) {
-        return none;
-    }
-    let d = s - c.centre;
-    let along = d.dot(c.axis);
-    let radial = d - c.axis * along;
-    let rho = radial.length();
-    let across = if rho > 1.0e-6 {
-        radial / rho
-    } else {
-        c.axis.any_orthonormal_vector()
-    };
-    let up = if along >= 0.0 { c.axis } else { -c.axis };
-    let (beyond_side, beyond_cap) = (rho - c.radius, along.abs() - c.half_height);
-    let (normal, surface, signed) = if beyond_side > 0.0 && beyond_cap > 0.0 {
-        let rim = c.centre + across * c.radius + up * c.half_height;
-        let offset = s - rim;
-        let dist = offset.length();
-        (offset / dist, rim, dist)
-    } else if beyond_cap >= beyond_side {
-        (up, c.centre + up * c.half_height, beyond_cap)
-    } else {
-        (across, c.centre + across * c.radius, beyond_side)
-    };
-    if !(signed < convex.reach && normal.is_finite()) {
-        return none;
-    }
-    let offset = normal.dot(surface) + convex.thickness;
-    let from = normal.dot(s);
-    let offset = if from < offset - convex.settle {
-        from
-    } else {
-        offset
-    };
-    (normal.to_array(), offset)
-}
-
-/// [`convex_plane`] of a convex hull from its faces ([`HullFaces`]): the
-/// plane of the face that holds the point nearest `start`, moved out by
-/// the thickness; `None` for a start nearest an edge or a corner (the
-/// stage's contact then finds it).
-#[inline(always)]
-fn hull_plane(
-    convex: &StillConvex,
-    (hulls, faces): (&HullFaces, (u32, u32)),
-    start: [f32; 3],
-) -> Option<([f32; 3], f32)> {
-    let none = ([0.0; 3], f32::NEG_INFINITY);
-    let s = Vector::from(start);
-    if !(s.cmpge(convex.lo).all() && s.cmple(convex.hi).all()) {
-        return Some(none);
-    }
-    let (normal, surface, beyond) = hulls.nearest_face(faces, s)?;
-    if beyond >= convex.reach {
-        return Some(none);
-    }
-    let offset = surface + convex.thickness;
-    let from = normal.dot(s);
-    let offset = if from < offset - convex.settle {
-        from
-    } else {
-        offset
-    };
-    Some((normal.to_array(), offset))
-}
-
-/// The planes of the convex shape of `obstacle` ([`convex_plane`]) for
-/// lanes starting at `start`, into `out` (normal x, y, z, offset).
-fn convex_planes_of(
-    convex: &StillConvex,
-    (obstacle, hulls): (&Obstacle, &HullFaces),
-    start: [&[f32]; 3],
-    out: &mut [&mut [f32]; 4],
-) {
-    let n = start[0].len();
-    assert!(start.iter().all(|s| s.len() == n) && out.iter().all(|o| o.len() == n));
-    // The shape's kind and pose read once (a downcast through `dyn Shape`).
-    let shape = &*obstacle.shape;
-    let analytic = Analytic::of(shape);
-    let pose = PoseF64::placing(&obstacle.pose, analytic);
-    for k in 0..n {
-        let start = [start[0][k], start[1][k], start[2][k]];
-        let face = || {
-            convex
-                .hull
-                .and_then(|faces| hull_plane(convex, (hulls, faces), start))
-        };
-        let (normal, offset) = match &convex.cylinder {
-            Some(cylinder) => cylinder_plane(convex, cylinder, start),
-            None => face().unwrap_or_else(|| convex_plane(convex, (shape, analytic, &pose), start)),
-        };
-        for a in 0..3 {
-            out[a][k] = normal[a];
-        }
-        out[3][k] = offset;
-    }
-}
-
 /// A squared distance from a ball's centre under which a lane may be
 /// inside it, `reach` (m) out: the square of `reach` with a margin for the
 /// rounding of a squared distance (never under it where the exact test,
@@ -1942,9 +1619,10 @@ fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::collision::contact::contact;
+    use crate::collision::contact::{contact, contact_prepared, Analytic, PoseF64};
     use crate::collision::DynamicBody;
     use crate::math::Pose;
+    use crate::solver::lane_convex::{convex_plane, cylinder_plane, hull_plane};
     use parry3d::shape::SharedShape;
 
     const THICKNESS: f32 = 0.01;

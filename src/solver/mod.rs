@@ -18,6 +18,7 @@ mod implicit_euler;
 mod integrate;
 mod integrator;
 mod lane_contacts;
+mod lane_convex;
 mod lane_motion;
 mod ordering;
 mod pin_support;
