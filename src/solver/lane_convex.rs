@@ -47,7 +47,38 @@ pub(super) struct StillConvex {
     pub(super) hull: Option<(u32, u32)>,
 }
 
+/// No plane: an offset of −∞ (every point in front of it).
+const NONE: ([f32; 3], f32) = ([0.0; 3], f32::NEG_INFINITY);
+
 impl StillConvex {
+    /// Whether `s` (m) is in the box a lane within reach of the shape
+    /// starts in.
+    #[inline(always)]
+    fn boxes(&self, s: Vector) -> bool {
+        s.cmpge(self.lo).all() && s.cmple(self.hi).all()
+    }
+
+    /// The plane that holds a lane starting at `s` (m) whose nearest point
+    /// of the shape lies on the plane `normal · x = surface` (unit normal,
+    /// m), `signed` (m, negative inside) from it: that plane moved out by
+    /// the thickness when `s` is within reach, held where `s` is along the
+    /// normal when it starts deep within the thickness (as a cuboid's,
+    /// `lane_contacts::cuboid_plane`), none beyond reach.
+    #[inline(always)]
+    fn plane(&self, s: Vector, (normal, surface, signed): (Vector, f32, f32)) -> ([f32; 3], f32) {
+        if signed.is_nan() || signed >= self.reach {
+            return NONE;
+        }
+        let offset = surface + self.thickness;
+        let from = normal.dot(s);
+        let offset = if from < offset - self.settle {
+            from
+        } else {
+            offset
+        };
+        (normal.to_array(), offset)
+    }
+
     /// The still convex shape of obstacle `o` (number `index` of the
     /// substep's, its planes in record `slot`) for lanes within
     /// `thickness` (m) of it, moving at most `motion` (m) in the substep,
@@ -129,7 +160,10 @@ impl HullFaces {
         for face in hull.faces() {
             let range = face.first_vertex_or_edge as usize
                 ..(face.first_vertex_or_edge + face.num_vertices_or_edges) as usize;
-            let corners = adjacent.get(range)?;
+            let Some(corners) = adjacent.get(range) else {
+                self.truncate(first, first_edge);
+                return None;
+            };
             let corner =
                 |k: usize| pose.transform_point(points[corners[k % corners.len()] as usize]);
             let normal = (pose.rotation * face.normal).normalize();
@@ -231,27 +265,17 @@ pub(super) fn convex_plane(
     (shape, analytic, pose): (&dyn Shape, Analytic, &PoseF64),
     start: [f32; 3],
 ) -> ([f32; 3], f32) {
-    let none = ([0.0; 3], f32::NEG_INFINITY);
     let s = Vector::from(start);
-    if !(s.cmpge(convex.lo).all() && s.cmple(convex.hi).all()) {
-        return none;
+    if !convex.boxes(s) {
+        return NONE;
     }
     let Some(hit) = contact_prepared(shape, analytic, pose, s) else {
-        return none;
+        return NONE;
     };
-    if hit.signed_distance >= convex.reach {
-        return none;
-    }
-    let normal = hit.normal;
-    let offset = normal.dot(hit.point) + convex.thickness;
-    let from = normal.dot(s);
-    // Deep within the thickness: held where it starts (`cuboid_plane`).
-    let offset = if from < offset - convex.settle {
-        from
-    } else {
-        offset
-    };
-    (normal.to_array(), offset)
+    convex.plane(
+        s,
+        (hit.normal, hit.normal.dot(hit.point), hit.signed_distance),
+    )
 }
 
 /// [`convex_plane`] of a cylinder, in single precision: the tangent plane
@@ -266,10 +290,9 @@ pub(super) fn cylinder_plane(
     c: &StillCylinder,
     start: [f32; 3],
 ) -> ([f32; 3], f32) {
-    let none = ([0.0; 3], f32::NEG_INFINITY);
     let s = Vector::from(start);
-    if !(s.cmpge(convex.lo).all() && s.cmple(convex.hi).all()) {
-        return none;
+    if !convex.boxes(s) {
+        return NONE;
     }
     let d = s - c.centre;
     let along = d.dot(c.axis);
@@ -292,17 +315,10 @@ pub(super) fn cylinder_plane(
     } else {
         (across, c.centre + across * c.radius, beyond_side)
     };
-    if !(signed < convex.reach && normal.is_finite()) {
-        return none;
+    if !normal.is_finite() {
+        return NONE;
     }
-    let offset = normal.dot(surface) + convex.thickness;
-    let from = normal.dot(s);
-    let offset = if from < offset - convex.settle {
-        from
-    } else {
-        offset
-    };
-    (normal.to_array(), offset)
+    convex.plane(s, (normal, normal.dot(surface), signed))
 }
 
 /// [`convex_plane`] of a convex hull from its faces ([`HullFaces`]): the
@@ -315,23 +331,11 @@ pub(super) fn hull_plane(
     (hulls, faces): (&HullFaces, (u32, u32)),
     start: [f32; 3],
 ) -> Option<([f32; 3], f32)> {
-    let none = ([0.0; 3], f32::NEG_INFINITY);
     let s = Vector::from(start);
-    if !(s.cmpge(convex.lo).all() && s.cmple(convex.hi).all()) {
-        return Some(none);
+    if !convex.boxes(s) {
+        return Some(NONE);
     }
-    let (normal, surface, beyond) = hulls.nearest_face(faces, s)?;
-    if beyond >= convex.reach {
-        return Some(none);
-    }
-    let offset = surface + convex.thickness;
-    let from = normal.dot(s);
-    let offset = if from < offset - convex.settle {
-        from
-    } else {
-        offset
-    };
-    Some((normal.to_array(), offset))
+    Some(convex.plane(s, hulls.nearest_face(faces, s)?))
 }
 
 /// The planes of the convex shape of `obstacle` ([`convex_plane`]) for
