@@ -35,8 +35,9 @@
 //! the lanes for it (`box` 6.4 → 4.4 ms, bench, one thread).
 
 use crate::collision::{chords_clear_ball, Obstacle, EDGE_SAMPLES};
-use crate::math::{simd_available, Vector};
+use crate::math::{simd_available, Pose, Vector};
 use crate::parallel::{Disjoint, Team};
+use parry3d::shape::Shape;
 
 use super::grid_sweep::{GridPlan, LanePlanes, Lanes};
 use super::lane_convex::{convex_planes_of, HullFaces, StillConvex};
@@ -138,21 +139,41 @@ pub(crate) struct LaneContacts {
     hulls: HullFaces,
 }
 
+/// The pieces of an obstacle's `shape` the lanes take one by one, each
+/// with its pose in the obstacle's frame and its index among a compound's
+/// parts: a compound's parts (parry's compounds do not nest), or the
+/// shape itself.
+fn pieces(shape: &dyn Shape) -> impl Iterator<Item = (Option<usize>, Pose, &dyn Shape)> {
+    let parts = shape.as_compound().map_or(&[][..], |c| c.shapes());
+    let whole = shape
+        .as_compound()
+        .is_none()
+        .then_some((None, Pose::IDENTITY, shape));
+    whole.into_iter().chain(
+        parts
+            .iter()
+            .enumerate()
+            .map(|(k, (pose, part))| (Some(k), *pose, &**part)),
+    )
+}
+
 impl LaneContacts {
     /// Whether every obstacle is one the lanes may hold, whatever the
     /// motion (none counts: nothing to hold): still (no rapier body, no
-    /// velocity), a ball, a capsule, a half-space, a cuboid or another
-    /// shape parry knows to be convex (a cylinder, a cone, a convex hull;
-    /// not a triangle mesh, a heightfield or a compound).
+    /// velocity), and a ball, a capsule, a half-space, a cuboid or another
+    /// shape parry knows to be convex (a cylinder, a cone, a convex hull),
+    /// or a compound of such parts (a table built of a top and legs, a
+    /// convex decomposition); not a triangle mesh or a heightfield.
     pub fn may_hold(obstacles: &[Obstacle]) -> bool {
         obstacles.iter().all(|o| {
-            let shape = &o.shape;
             o.is_still()
-                && (shape.as_ball().is_some()
-                    || shape.as_capsule().is_some()
-                    || shape.as_halfspace().is_some()
-                    || shape.as_cuboid().is_some()
-                    || shape.is_convex())
+                && pieces(&*o.shape).all(|(_, _, shape)| {
+                    shape.as_ball().is_some()
+                        || shape.as_capsule().is_some()
+                        || shape.as_halfspace().is_some()
+                        || shape.as_cuboid().is_some()
+                        || shape.is_convex()
+                })
         })
     }
 
@@ -163,24 +184,27 @@ impl LaneContacts {
     /// cuboid of half extents over [`BALL_MOTIONS`] times `motion` (a particle is
     /// put back through the nearest face, which must be the one it came
     /// in by), or another convex shape whose own box's half extents are
-    /// (a triangle, flat, is not held). The collision stage then need not
-    /// run after a substep but the last.
+    /// (a triangle, flat, is not held); a compound when each of its parts
+    /// is. The collision stage then need not run after a substep but the
+    /// last.
     pub fn holds(obstacles: &[Obstacle], motion: f32) -> bool {
         let deep = BALL_MOTIONS * motion;
         !obstacles.is_empty()
             && Self::may_hold(obstacles)
-            && obstacles.iter().all(|o| {
-                let shape = &o.shape;
-                match (shape.as_ball(), shape.as_capsule(), shape.as_cuboid()) {
-                    (Some(ball), _, _) => ball.radius > deep,
-                    (_, Some(capsule), _) => capsule.radius > deep,
-                    (_, _, Some(cuboid)) => cuboid.half_extents.min_element() > deep,
-                    _ => {
-                        shape.as_halfspace().is_some()
-                            || shape.compute_local_aabb().half_extents().min_element() > deep
+            && obstacles
+                .iter()
+                .flat_map(|o| pieces(&*o.shape))
+                .all(|(_, _, shape)| {
+                    match (shape.as_ball(), shape.as_capsule(), shape.as_cuboid()) {
+                        (Some(ball), _, _) => ball.radius > deep,
+                        (_, Some(capsule), _) => capsule.radius > deep,
+                        (_, _, Some(cuboid)) => cuboid.half_extents.min_element() > deep,
+                        _ => {
+                            shape.as_halfspace().is_some()
+                                || shape.compute_local_aabb().half_extents().min_element() > deep
+                        }
                     }
-                }
-            })
+                })
     }
 
     /// Takes `obstacles` for a substep of `n` lanes in which no particle
@@ -199,68 +223,13 @@ impl LaneContacts {
         if !Self::holds(obstacles, motion) {
             return false;
         }
-        for o in obstacles {
-            let shape = match (
-                o.shape.as_ball(),
-                o.shape.as_halfspace(),
-                o.shape.as_cuboid(),
-            ) {
-                (Some(ball), _, _) => StillShape::Ball {
-                    centre: o.pose.translation,
-                    reach: ball.radius + thickness,
-                },
-                (None, Some(half), _) => {
-                    let normal = (o.pose.rotation * half.normal).normalize();
-                    StillShape::Plane {
-                        normal,
-                        offset: normal.dot(o.pose.translation) + thickness,
-                    }
-                }
-                (None, None, Some(cuboid)) => StillShape::Cuboid(StillCuboid {
-                    slot: self.slots(),
-                    centre: o.pose.translation,
-                    axes: [Vector::X, Vector::Y, Vector::Z]
-                        .map(|axis| (o.pose.rotation * axis).normalize()),
-                    half: cuboid.half_extents,
-                    thickness,
-                    // As the collision stage's contact planes: within twice
-                    // the thickness and twice the substep's motion.
-                    reach: 2.0 * (thickness + motion),
-                    settle: SETTLE_SHARE * thickness,
-                }),
-                (None, None, None) => match o.shape.as_capsule() {
-                    Some(capsule) => {
-                        let [a, b] = [capsule.segment.a, capsule.segment.b]
-                            .map(|end| o.pose.transform_point(end));
-                        let length = (b - a).length();
-                        // A capsule of no length is a ball at `from`.
-                        let axis = if length > 0.0 {
-                            (b - a) / length
-                        } else {
-                            Vector::Y
-                        };
-                        StillShape::Capsule {
-                            from: a,
-                            axis,
-                            across: axis.any_orthonormal_vector(),
-                            length,
-                            reach: capsule.radius + thickness,
-                        }
-                    }
-                    // Another convex shape (`holds` took no other).
-                    None => {
-                        let slot = self.slots();
-                        let (index, settle) = (self.shapes.len(), SETTLE_SHARE * thickness);
-                        StillShape::Convex(StillConvex::new(
-                            (o, index, slot),
-                            (thickness, motion, settle),
-                            &mut self.hulls,
-                        ))
-                    }
-                },
-            };
-            self.shapes.push(shape);
-            self.friction.push(o.friction);
+        for (index, o) in obstacles.iter().enumerate() {
+            for (part, placed, shape) in pieces(&*o.shape) {
+                let pose = o.pose * placed;
+                let still = self.still_shape((shape, &pose), (index, part), (thickness, motion));
+                self.shapes.push(still);
+                self.friction.push(o.friction);
+            }
         }
         self.depth.clear();
         self.depth.resize(n, 0.0);
@@ -276,6 +245,73 @@ impl LaneContacts {
             record.resize(slots * n, f32::NEG_INFINITY);
         }
         true
+    }
+
+    /// The still `shape` at `pose` (piece `part` of a compound, or the
+    /// whole) of obstacle `index`, as the lanes hold it, its surface moved
+    /// out by `thickness` (m), for a substep in which no particle moves
+    /// further than `motion` (m); one [`Self::holds`] took.
+    fn still_shape(
+        &mut self,
+        (shape, pose): (&dyn Shape, &Pose),
+        (index, part): (usize, Option<usize>),
+        (thickness, motion): (f32, f32),
+    ) -> StillShape {
+        match (shape.as_ball(), shape.as_halfspace(), shape.as_cuboid()) {
+            (Some(ball), _, _) => StillShape::Ball {
+                centre: pose.translation,
+                reach: ball.radius + thickness,
+            },
+            (None, Some(half), _) => {
+                let normal = (pose.rotation * half.normal).normalize();
+                StillShape::Plane {
+                    normal,
+                    offset: normal.dot(pose.translation) + thickness,
+                }
+            }
+            (None, None, Some(cuboid)) => StillShape::Cuboid(StillCuboid {
+                slot: self.slots(),
+                centre: pose.translation,
+                axes: [Vector::X, Vector::Y, Vector::Z]
+                    .map(|axis| (pose.rotation * axis).normalize()),
+                half: cuboid.half_extents,
+                thickness,
+                // As the collision stage's contact planes: within twice
+                // the thickness and twice the substep's motion.
+                reach: 2.0 * (thickness + motion),
+                settle: SETTLE_SHARE * thickness,
+            }),
+            (None, None, None) => match shape.as_capsule() {
+                Some(capsule) => {
+                    let [a, b] =
+                        [capsule.segment.a, capsule.segment.b].map(|end| pose.transform_point(end));
+                    let length = (b - a).length();
+                    // A capsule of no length is a ball at `from`.
+                    let axis = if length > 0.0 {
+                        (b - a) / length
+                    } else {
+                        Vector::Y
+                    };
+                    StillShape::Capsule {
+                        from: a,
+                        axis,
+                        across: axis.any_orthonormal_vector(),
+                        length,
+                        reach: capsule.radius + thickness,
+                    }
+                }
+                // Another convex shape (`holds` took no other).
+                None => {
+                    let (slot, settle) = (self.slots(), SETTLE_SHARE * thickness);
+                    StillShape::Convex(StillConvex::new(
+                        (shape, pose),
+                        (index, part, slot),
+                        (thickness, motion, settle),
+                        &mut self.hulls,
+                    ))
+                }
+            },
+        }
     }
 
     /// Each cuboid's and other convex shape's plane for every lane, from
@@ -2275,6 +2311,84 @@ mod tests {
             (&portable.depth, &portable.touch),
             (&contacts.depth, &contacts.touch)
         );
+    }
+
+    /// A table built as one compound collider (a turned cuboid top on a
+    /// cylinder leg) is held piece by piece, to the same bits as the same
+    /// pieces as two obstacles: the planes, the pass with friction and its
+    /// records; a compound with a flat part is not held.
+    #[test]
+    fn a_compound_is_held_as_its_parts_are() {
+        let turn = glam::Quat::from_rotation_y(0.3) * glam::Quat::from_rotation_x(0.1);
+        let place = Pose::from_parts(Vector::new(0.2, 0.5, -0.1), turn);
+        let (top_at, leg_at) = (
+            Pose::from_translation(Vector::new(0.0, 0.25, 0.0)),
+            Pose::from_translation(Vector::new(0.0, 0.0, 0.0)),
+        );
+        let (top, leg) = (
+            SharedShape::cuboid(0.4, 0.02, 0.3),
+            SharedShape::cylinder(0.25, 0.05),
+        );
+        let table = Obstacle::new(
+            SharedShape::compound(vec![(top_at, top.clone()), (leg_at, leg.clone())]),
+            place,
+        )
+        .with_friction(0.4);
+        let apart = [
+            Obstacle::new(top, place * top_at).with_friction(0.4),
+            Obstacle::new(leg, place * leg_at).with_friction(0.4),
+        ];
+        let n = 2 * CHUNK + 11;
+        let motion = 0.003;
+        let at = |k: usize| {
+            let s = k as f32;
+            let (u, v) = ((1.3 * s).sin(), (2.1 * s).sin());
+            // Half over the top, up to 2 cm above it, half around the leg,
+            // up to 2 cm out; each moved 1 cm in (some of them beside the
+            // top or below it, and some of those clear of everything).
+            let (start, inward) = if k.is_multiple_of(2) {
+                let y = 0.27 + 0.02 * ((0.37 * s) % 1.0);
+                (Vector::new(0.45 * u, y, 0.35 * v), Vector::NEG_Y)
+            } else {
+                let across = Vector::new(u, 0.0, (0.7 * s).cos()).normalize();
+                let r = 0.05 + 0.02 * ((0.37 * s) % 1.0);
+                (across * r + Vector::Y * (0.22 * v), -across)
+            };
+            let start = place.transform_point(start);
+            let moved = start + place.rotation * inward * 0.01;
+            (moved, start, if k.is_multiple_of(5) { 0.0 } else { 1.0 })
+        };
+        let (mut whole, mut parts) = (LaneContacts::default(), LaneContacts::default());
+        assert!(whole.begin(std::slice::from_ref(&table), (THICKNESS, motion), n));
+        assert!(parts.begin(&apart, (THICKNESS, motion), n));
+        assert_eq!(whole.shapes.len(), 2);
+        let (mut l, mut m) = (placed(n, at), placed(n, at));
+        let before = bits(&mut l);
+        whole.take_planes(std::slice::from_ref(&table), &mut l, Team::ALONE);
+        parts.take_planes(&apart, &mut m, Team::ALONE);
+        assert_eq!(whole.planes, parts.planes, "the planes' bits");
+        whole.project_with_friction(&mut l, Team::ALONE);
+        parts.project_with_friction(&mut m, Team::ALONE);
+        let after = bits(&mut l);
+        assert_eq!(after, bits(&mut m));
+        assert_eq!((&whole.depth, &whole.touch), (&parts.depth, &parts.touch));
+        let moved = (0..n)
+            .filter(|&k| position_in(&before, n, k) != position_in(&after, n, k))
+            .count();
+        assert!(moved > n / 2, "{moved} of {n} lanes put out");
+        // A flat part (a triangle) is held by none (parry allows no mesh
+        // in a compound).
+        let with_triangle = Obstacle::new(
+            SharedShape::compound(vec![
+                (top_at, SharedShape::ball(0.1)),
+                (
+                    leg_at,
+                    SharedShape::triangle(Vector::ZERO, Vector::X, Vector::Z),
+                ),
+            ]),
+            place,
+        );
+        assert!(!LaneContacts::holds(&[with_triangle], motion));
     }
 
     /// A turned cylinder's planes in single precision agree with those

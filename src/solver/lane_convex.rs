@@ -29,8 +29,10 @@ use crate::math::{Pose, Vector};
 /// stage after every substep before: 70% of a frame of 32 substeps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct StillConvex {
-    /// The obstacle's index among the substep's.
+    /// The obstacle's index among the substep's, and the shape's among
+    /// its compound's parts (none for the obstacle's whole shape).
     pub(super) obstacle: usize,
+    pub(super) part: Option<usize>,
     /// The box (m) a lane that starts within reach of the shape lies in.
     lo: Vector,
     hi: Vector,
@@ -79,13 +81,14 @@ impl StillConvex {
         (normal.to_array(), offset)
     }
 
-    /// The still convex shape of obstacle `o` (number `index` of the
-    /// substep's, its planes in record `slot`) for lanes within
-    /// `thickness` (m) of it, moving at most `motion` (m) in the substep,
-    /// held to the thickness from `settle` (m) within it; a hull's faces
-    /// go to `hulls`.
+    /// The still convex `shape` at `pose` (obstacle `index` of the
+    /// substep's, or its compound's `part`; its planes in record `slot`)
+    /// for lanes within `thickness` (m) of it, moving at most `motion` (m)
+    /// in the substep, held to the thickness from `settle` (m) within it;
+    /// a hull's faces go to `hulls`.
     pub(super) fn new(
-        (o, index, slot): (&Obstacle, usize, usize),
+        (shape, pose): (&dyn Shape, &Pose),
+        (index, part, slot): (usize, Option<usize>, usize),
         (thickness, motion, settle): (f32, f32, f32),
         hulls: &mut HullFaces,
     ) -> StillConvex {
@@ -93,19 +96,19 @@ impl StillConvex {
         // substep's motion.
         let reach = 2.0 * (thickness + motion);
         let pad = Vector::splat(reach);
-        let aabb = o.shape.compute_aabb(&o.pose);
-        let cylinder = o.shape.as_cylinder().map(|c| StillCylinder {
-            centre: o.pose.translation,
-            axis: (o.pose.rotation * Vector::Y).normalize(),
+        let aabb = shape.compute_aabb(pose);
+        let cylinder = shape.as_cylinder().map(|c| StillCylinder {
+            centre: pose.translation,
+            axis: (pose.rotation * Vector::Y).normalize(),
             half_height: c.half_height,
             radius: c.radius,
         });
-        let hull = o
-            .shape
+        let hull = shape
             .as_convex_polyhedron()
-            .and_then(|hull| hulls.add(hull, &o.pose));
+            .and_then(|hull| hulls.add(hull, pose));
         StillConvex {
             obstacle: index,
+            part,
             lo: aabb.mins - pad,
             hi: aabb.maxs + pad,
             thickness,
@@ -348,10 +351,17 @@ pub(super) fn convex_planes_of(
 ) {
     let n = start[0].len();
     assert!(start.iter().all(|s| s.len() == n) && out.iter().all(|o| o.len() == n));
-    // The shape's kind and pose read once (a downcast through `dyn Shape`).
-    let shape = &*obstacle.shape;
+    // The shape's kind and pose read once (a downcast through `dyn Shape`):
+    // the obstacle's, or its compound's part's.
+    let part = convex
+        .part
+        .and_then(|k| obstacle.shape.as_compound()?.shapes().get(k));
+    let (shape, placed): (&dyn Shape, Pose) = match part {
+        Some((pose, part)) => (&**part, obstacle.pose * *pose),
+        None => (&*obstacle.shape, obstacle.pose),
+    };
     let analytic = Analytic::of(shape);
-    let pose = PoseF64::placing(&obstacle.pose, analytic);
+    let pose = PoseF64::placing(&placed, analytic);
     for k in 0..n {
         let start = [start[0][k], start[1][k], start[2][k]];
         let face = || {
