@@ -405,6 +405,18 @@ mod tests {
     use crate::math::Rotation;
     use parry3d::shape::{Capsule, Cuboid};
 
+    /// `ours` at `p` is parry's contact: the same distance and surface
+    /// point within 10 µm, the same normal a millimetre or more from the
+    /// surface.
+    fn assert_same_contact(p: Vector, ours: &Contact, parry: &Contact) {
+        let d = (ours.signed_distance - parry.signed_distance).abs();
+        assert!(d < 1e-5, "{p}: {ours:?} against {parry:?}");
+        assert!((ours.point - parry.point).length() < 1e-5, "{p}");
+        if parry.signed_distance.abs() > 1e-3 {
+            assert!(ours.normal.dot(parry.normal) > 0.9999, "{p}");
+        }
+    }
+
     #[test]
     fn cuboid_contacts_match_parry_laid_along_the_axes_or_turned() {
         let cuboid = Cuboid::new(Vector::new(0.5, 0.3, 0.4));
@@ -424,12 +436,7 @@ mod tests {
                         let p = pose.transform_point(local);
                         let ours = cuboid_contact(cuboid.half_extents, &prepared, p).unwrap();
                         let parry = general_contact(&cuboid, &pose, p).unwrap();
-                        let d = (ours.signed_distance - parry.signed_distance).abs();
-                        assert!(d < 1e-5, "{p}: {ours:?} against {parry:?}");
-                        assert!((ours.point - parry.point).length() < 1e-5, "{p}");
-                        if parry.signed_distance.abs() > 1e-3 {
-                            assert!(ours.normal.dot(parry.normal) > 0.9999, "{p}");
-                        }
+                        assert_same_contact(p, &ours, &parry);
                         checked += 1;
                     }
                 }
@@ -454,12 +461,7 @@ mod tests {
                     let p = pose.transform_point(local);
                     let ours = contact(shape, &pose, p).unwrap();
                     let parry = general_contact(shape, &pose, p).unwrap();
-                    let d = (ours.signed_distance - parry.signed_distance).abs();
-                    assert!(d < 1e-5, "{p}: {ours:?} against {parry:?}");
-                    assert!((ours.point - parry.point).length() < 1e-5, "{p}");
-                    if parry.signed_distance.abs() > 1e-3 {
-                        assert!(ours.normal.dot(parry.normal) > 0.9999, "{p}");
-                    }
+                    assert_same_contact(p, &ours, &parry);
                     let rho = (local.x * local.x + local.z * local.z).sqrt();
                     rims += usize::from(rho > 0.4 && local.y.abs() > 0.3);
                     if parry.signed_distance < 0.0 {
@@ -503,12 +505,7 @@ mod tests {
                     let p = pose.transform_point(local);
                     let ours = contact(shape, &pose, p).unwrap();
                     let parry = general_contact(shape, &pose, p).unwrap();
-                    let d = (ours.signed_distance - parry.signed_distance).abs();
-                    assert!(d < 1e-5, "{p}: {ours:?} against {parry:?}");
-                    assert!((ours.point - parry.point).length() < 1e-5, "{p}");
-                    if parry.signed_distance.abs() > 1e-3 {
-                        assert!(ours.normal.dot(parry.normal) > 0.9999, "{p}");
-                    }
+                    assert_same_contact(p, &ours, &parry);
                     if parry.signed_distance < 0.0 {
                         inside += 1;
                     } else {
