@@ -144,11 +144,9 @@ pub(crate) struct LaneContacts {
 /// parts: a compound's parts (parry's compounds do not nest), or the
 /// shape itself.
 fn pieces(shape: &dyn Shape) -> impl Iterator<Item = (Option<usize>, Pose, &dyn Shape)> {
-    let parts = shape.as_compound().map_or(&[][..], |c| c.shapes());
-    let whole = shape
-        .as_compound()
-        .is_none()
-        .then_some((None, Pose::IDENTITY, shape));
+    let compound = shape.as_compound();
+    let parts = compound.map_or(&[][..], |c| c.shapes());
+    let whole = compound.is_none().then_some((None, Pose::IDENTITY, shape));
     whole.into_iter().chain(
         parts
             .iter()
@@ -166,14 +164,8 @@ impl LaneContacts {
     /// convex decomposition); not a triangle mesh or a heightfield.
     pub fn may_hold(obstacles: &[Obstacle]) -> bool {
         obstacles.iter().all(|o| {
-            o.is_still()
-                && pieces(&*o.shape).all(|(_, _, shape)| {
-                    shape.as_ball().is_some()
-                        || shape.as_capsule().is_some()
-                        || shape.as_halfspace().is_some()
-                        || shape.as_cuboid().is_some()
-                        || shape.is_convex()
-                })
+            // parry knows balls, capsules, half-spaces and cuboids convex too.
+            o.is_still() && pieces(&*o.shape).all(|(_, _, shape)| shape.is_convex())
         })
     }
 
@@ -329,10 +321,8 @@ impl LaneContacts {
         }
         let simd = simd_available();
         for shape in &self.shapes {
-            let (slot, cuboid) = match *shape {
-                StillShape::Cuboid(cuboid) => (cuboid.slot, Some(cuboid)),
-                StillShape::Convex(convex) => (convex.slot, None),
-                _ => continue,
+            let Some(slot) = shape.slot() else {
+                continue;
             };
             let slot = slot * n..(slot + 1) * n;
             let [nx, ny, nz, offset] = self
@@ -348,9 +338,9 @@ impl LaneContacts {
                         [nx, ny, nz, offset].map(|a| a.range(range.clone())),
                     )
                 };
-                match (cuboid, *shape) {
-                    (Some(cuboid), _) => planes_of(&cuboid, start, &mut out, simd),
-                    (None, StillShape::Convex(convex)) => convex_planes_of(
+                match *shape {
+                    StillShape::Cuboid(cuboid) => planes_of(&cuboid, start, &mut out, simd),
+                    StillShape::Convex(convex) => convex_planes_of(
                         &convex,
                         (&obstacles[convex.obstacle], &self.hulls),
                         start,
