@@ -41,6 +41,7 @@ use parry3d::shape::Shape;
 
 use super::grid_sweep::{GridPlan, LanePlanes, Lanes};
 use super::lane_convex::{convex_planes_of, HullFaces, StillConvex};
+use super::lane_mesh::{is_held_mesh, mesh_planes_of, MeshLists, StillMesh};
 
 /// Lanes per chunk of a pass, a chunk to a thread.
 const CHUNK: usize = 2048;
@@ -82,6 +83,9 @@ enum StillShape {
     /// Any other convex shape (a cylinder, a cone, a convex hull), held
     /// as a cuboid is, by a plane a lane (`lane_convex.rs`).
     Convex(StillConvex),
+    /// A triangle mesh, held by a plane a lane through its nearest
+    /// point (`lane_mesh.rs`).
+    Mesh(StillMesh),
 }
 
 /// Within this share of a capsule's reach from its axis, a lane goes out
@@ -137,6 +141,9 @@ pub(crate) struct LaneContacts {
     faces: Vec<u8>,
     /// The faces of the convex hulls held this substep.
     hulls: HullFaces,
+    /// Per mesh held, per lane: the triangles near it, kept from substep
+    /// to substep.
+    meshes: MeshLists,
 }
 
 /// The pieces of an obstacle's `shape` the lanes take one by one, each
@@ -165,7 +172,8 @@ impl LaneContacts {
     pub fn may_hold(obstacles: &[Obstacle]) -> bool {
         obstacles.iter().all(|o| {
             // parry knows balls, capsules, half-spaces and cuboids convex too.
-            o.is_still() && pieces(&*o.shape).all(|(_, _, shape)| shape.is_convex())
+            o.is_still()
+                && pieces(&*o.shape).all(|(_, _, shape)| shape.is_convex() || is_held_mesh(shape))
         })
     }
 
@@ -191,8 +199,11 @@ impl LaneContacts {
                         (Some(ball), _, _) => ball.radius > deep,
                         (_, Some(capsule), _) => capsule.radius > deep,
                         (_, _, Some(cuboid)) => cuboid.half_extents.min_element() > deep,
+                        // A mesh has no inside to come out of the wrong
+                        // way: its planes face the side a lane starts on.
                         _ => {
                             shape.as_halfspace().is_some()
+                                || is_held_mesh(shape)
                                 || shape.compute_local_aabb().half_extents().min_element() > deep
                         }
                     }
@@ -212,13 +223,14 @@ impl LaneContacts {
         self.shapes.clear();
         self.friction.clear();
         self.hulls.clear();
+        self.meshes.begin();
         if !Self::holds(obstacles, motion) {
             return false;
         }
         for (index, o) in obstacles.iter().enumerate() {
             for (part, placed, shape) in pieces(&*o.shape) {
                 let pose = o.pose * placed;
-                let still = self.still_shape((shape, &pose), (index, part), (thickness, motion));
+                let still = self.still_shape((shape, &pose), (index, part), (thickness, motion), n);
                 self.shapes.push(still);
                 self.friction.push(o.friction);
             }
@@ -241,14 +253,24 @@ impl LaneContacts {
 
     /// The still `shape` at `pose` (piece `part` of a compound, or the
     /// whole) of obstacle `index`, as the lanes hold it, its surface moved
-    /// out by `thickness` (m), for a substep in which no particle moves
-    /// further than `motion` (m); one [`Self::holds`] took.
+    /// out by `thickness` (m), for a substep of `lanes` lanes in which no
+    /// particle moves further than `motion` (m); one [`Self::holds`] took.
     fn still_shape(
         &mut self,
         (shape, pose): (&dyn Shape, &Pose),
         (index, part): (usize, Option<usize>),
         (thickness, motion): (f32, f32),
+        lanes: usize,
     ) -> StillShape {
+        if let Some(mesh) = shape.as_trimesh() {
+            let (slot, settle) = (self.slots(), SETTLE_SHARE * thickness);
+            let list = self.meshes.take((mesh, pose), (index, part), lanes);
+            return StillShape::Mesh(StillMesh::new(
+                (shape, pose),
+                (index, part, slot, list),
+                (thickness, motion, settle),
+            ));
+        }
         match (shape.as_ball(), shape.as_halfspace(), shape.as_cuboid()) {
             (Some(ball), _, _) => StillShape::Ball {
                 centre: pose.translation,
@@ -325,6 +347,10 @@ impl LaneContacts {
                 continue;
             };
             let slot = slot * n..(slot + 1) * n;
+            let lists = match shape {
+                StillShape::Mesh(mesh) => Some(self.meshes.shared(mesh.list)),
+                _ => None,
+            };
             let [nx, ny, nz, offset] = self
                 .planes
                 .each_mut()
@@ -346,6 +372,14 @@ impl LaneContacts {
                         start,
                         &mut out,
                     ),
+                    StillShape::Mesh(mesh) => {
+                        if let Some(lists) = &lists {
+                            // SAFETY: as the planes: this chunk's lanes alone.
+                            let lists = unsafe { lists.lanes(range.clone()) };
+                            let obstacle = &obstacles[mesh.held.obstacle];
+                            mesh_planes_of(&mesh, obstacle, lists, start, &mut out);
+                        }
+                    }
                     _ => {}
                 }
                 0.0
@@ -732,7 +766,11 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
                 push = _mm256_and_ps(inside, gap);
             }
             StillShape::Cuboid(StillCuboid { slot, .. })
-            | StillShape::Convex(StillConvex { slot, .. }) => {
+            | StillShape::Convex(StillConvex { slot, .. })
+            | StillShape::Mesh(StillMesh {
+                held: StillConvex { slot, .. },
+                ..
+            }) => {
                 // This lane's plane, taken at the substep's start.
                 // SAFETY: within every plane array, checked once a chunk
                 // (`Law::check_planes`).
@@ -1071,7 +1109,11 @@ impl Eight {
         match shape {
             StillShape::Plane { normal, offset } => ([normal.x, normal.y, normal.z], offset),
             StillShape::Cuboid(StillCuboid { slot, .. })
-            | StillShape::Convex(StillConvex { slot, .. }) => self.plane(law, slot, k),
+            | StillShape::Convex(StillConvex { slot, .. })
+            | StillShape::Mesh(StillMesh {
+                held: StillConvex { slot, .. },
+                ..
+            }) => self.plane(law, slot, k),
             StillShape::Ball { .. } | StillShape::Capsule { .. } => ([0.0; 3], f32::NEG_INFINITY),
         }
     }
@@ -1188,7 +1230,11 @@ fn maybe_inside(e: &Eight, law: &Law) -> bool {
                 }
             }
             StillShape::Cuboid(StillCuboid { slot, .. })
-            | StillShape::Convex(StillConvex { slot, .. }) => {
+            | StillShape::Convex(StillConvex { slot, .. })
+            | StillShape::Mesh(StillMesh {
+                held: StillConvex { slot, .. },
+                ..
+            }) => {
                 for k in 0..W {
                     let (m, offset) = e.plane(law, slot, k);
                     any |= offset - (m[0] * e.p[0][k] + m[1] * e.p[1][k] + m[2] * e.p[2][k]) > 0.0;
@@ -1219,7 +1265,10 @@ impl StillShape {
                     from.z + axis.z * t,
                 ]
             }
-            StillShape::Plane { .. } | StillShape::Cuboid(_) | StillShape::Convex(_) => [0.0; 3],
+            StillShape::Plane { .. }
+            | StillShape::Cuboid(_)
+            | StillShape::Convex(_)
+            | StillShape::Mesh(_) => [0.0; 3],
         }
     }
 
@@ -1229,7 +1278,11 @@ impl StillShape {
     fn slot(&self) -> Option<usize> {
         match *self {
             StillShape::Cuboid(StillCuboid { slot, .. })
-            | StillShape::Convex(StillConvex { slot, .. }) => Some(slot),
+            | StillShape::Convex(StillConvex { slot, .. })
+            | StillShape::Mesh(StillMesh {
+                held: StillConvex { slot, .. },
+                ..
+            }) => Some(slot),
             _ => None,
         }
     }
@@ -1577,7 +1630,10 @@ fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
                     push[k] = if inside[k] { reach - length } else { 0.0 };
                 }
             }
-            StillShape::Plane { .. } | StillShape::Cuboid(_) | StillShape::Convex(_) => {
+            StillShape::Plane { .. }
+            | StillShape::Cuboid(_)
+            | StillShape::Convex(_)
+            | StillShape::Mesh(_) => {
                 for k in 0..W {
                     let (m, offset) = e.half_space(law, shape, k);
                     let gap = offset - (m[0] * e.p[0][k] + m[1] * e.p[1][k] + m[2] * e.p[2][k]);
@@ -1649,7 +1705,7 @@ mod tests {
     use crate::collision::DynamicBody;
     use crate::math::Pose;
     use crate::solver::lane_convex::{convex_plane, cylinder_plane, hull_plane};
-    use parry3d::shape::SharedShape;
+    use parry3d::shape::{SharedShape, TriMeshFlags};
 
     const THICKNESS: f32 = 0.01;
 
@@ -1926,11 +1982,11 @@ mod tests {
         assert!(y.iter().all(|&y| (y - THICKNESS).abs() < 1e-6));
     }
 
-    /// The lanes hold still balls, capsules, half-spaces and cuboids only,
-    /// and no ball, capsule or cuboid the substep's motion could carry a
-    /// particle far into.
+    /// The lanes hold still convex shapes and meshes without an inside
+    /// only, and no ball, capsule or cuboid the substep's motion could
+    /// carry a particle far into.
     #[test]
-    fn the_lanes_hold_still_convex_shapes_only() {
+    fn the_lanes_hold_still_convex_shapes_and_meshes_only() {
         let [ball, floor] = ball_and_floor();
         assert!(LaneContacts::holds(&[ball.clone(), floor.clone()], 0.01));
         assert!(!LaneContacts::holds(&[], 0.01), "nothing to hold");
@@ -1985,7 +2041,9 @@ mod tests {
                 && !LaneContacts::holds(std::slice::from_ref(&triangle), 0.001),
             "a triangle is flat"
         );
-        // Not convex: a mesh of two triangles.
+        // Not convex but held: a mesh of two triangles, whatever its
+        // thickness (its planes face the side a lane starts on,
+        // `lane_mesh.rs`); not so a mesh with an inside (oriented).
         let mesh = Obstacle::new(
             SharedShape::trimesh(
                 vec![
@@ -1999,14 +2057,23 @@ mod tests {
             .expect("a mesh"),
             Pose::IDENTITY,
         );
-        assert!(!LaneContacts::may_hold(&[ball, mesh.clone()]));
+        assert!(LaneContacts::holds(&[ball.clone(), mesh.clone()], 0.001));
+        let tetrahedron = |flags| {
+            let corners = vec![Vector::ZERO, Vector::X, Vector::Y, Vector::Z];
+            let faces = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+            SharedShape::trimesh_with_flags(corners, faces, flags).expect("a mesh")
+        };
+        let open = Obstacle::new(tetrahedron(TriMeshFlags::empty()), Pose::IDENTITY);
+        assert!(LaneContacts::may_hold(std::slice::from_ref(&open)));
+        let oriented = Obstacle::new(tetrahedron(TriMeshFlags::ORIENTED), Pose::IDENTITY);
+        assert!(!LaneContacts::may_hold(&[ball, oriented.clone()]));
         // What it holds it holds whole, or nothing.
         let mut contacts = LaneContacts::default();
         assert!(
             contacts.begin(std::slice::from_ref(&floor), (THICKNESS, 0.01), 4)
                 && !contacts.is_empty()
         );
-        assert!(!contacts.begin(&[floor, mesh], (THICKNESS, 0.01), 4) && contacts.is_empty());
+        assert!(!contacts.begin(&[floor, oriented], (THICKNESS, 0.01), 4) && contacts.is_empty());
         assert_eq!(contacts.touching(), 0, "nothing held, nothing touching");
     }
 

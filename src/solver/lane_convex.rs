@@ -50,13 +50,19 @@ pub(super) struct StillConvex {
 }
 
 /// No plane: an offset of −∞ (every point in front of it).
-const NONE: ([f32; 3], f32) = ([0.0; 3], f32::NEG_INFINITY);
+pub(super) const NONE: ([f32; 3], f32) = ([0.0; 3], f32::NEG_INFINITY);
 
 impl StillConvex {
+    /// How far (m) from the shape a lane may start and be held.
+    #[inline(always)]
+    pub(super) fn reach(&self) -> f32 {
+        self.reach
+    }
+
     /// Whether `s` (m) is in the box a lane within reach of the shape
     /// starts in.
     #[inline(always)]
-    fn boxes(&self, s: Vector) -> bool {
+    pub(super) fn boxes(&self, s: Vector) -> bool {
         s.cmpge(self.lo).all() && s.cmple(self.hi).all()
     }
 
@@ -67,7 +73,11 @@ impl StillConvex {
     /// normal when it starts deep within the thickness (as a cuboid's,
     /// `lane_contacts::cuboid_plane`), none beyond reach.
     #[inline(always)]
-    fn plane(&self, s: Vector, (normal, surface, signed): (Vector, f32, f32)) -> ([f32; 3], f32) {
+    pub(super) fn plane(
+        &self,
+        s: Vector,
+        (normal, surface, signed): (Vector, f32, f32),
+    ) -> ([f32; 3], f32) {
         if signed.is_nan() || signed >= self.reach {
             return NONE;
         }

@@ -19,6 +19,7 @@ mod integrate;
 mod integrator;
 mod lane_contacts;
 mod lane_convex;
+mod lane_mesh;
 mod lane_motion;
 mod ordering;
 mod pin_support;
