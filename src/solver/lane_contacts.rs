@@ -41,7 +41,7 @@ use parry3d::shape::Shape;
 
 use super::grid_sweep::{GridPlan, LanePlanes, Lanes};
 use super::lane_convex::{convex_planes_of, HullFaces, StillConvex};
-use super::lane_mesh::{is_held_mesh, mesh_planes_of, MeshLists, StillMesh};
+use super::lane_mesh::{is_held_mesh, mesh_planes_of, MeshLists, StillMesh, Surface};
 
 /// Lanes per chunk of a pass, a chunk to a thread.
 const CHUNK: usize = 2048;
@@ -83,8 +83,8 @@ enum StillShape {
     /// Any other convex shape (a cylinder, a cone, a convex hull), held
     /// as a cuboid is, by a plane a lane (`lane_convex.rs`).
     Convex(StillConvex),
-    /// A triangle mesh, held by a plane a lane through its nearest
-    /// point (`lane_mesh.rs`).
+    /// A triangle mesh or a heightfield, held by a plane a lane through
+    /// its nearest point (`lane_mesh.rs`).
     Mesh(StillMesh),
 }
 
@@ -167,8 +167,9 @@ impl LaneContacts {
     /// motion (none counts: nothing to hold): still (no rapier body, no
     /// velocity), and a ball, a capsule, a half-space, a cuboid or another
     /// shape parry knows to be convex (a cylinder, a cone, a convex hull),
+    /// a triangle mesh without an inside or a heightfield (`lane_mesh.rs`),
     /// or a compound of such parts (a table built of a top and legs, a
-    /// convex decomposition); not a triangle mesh or a heightfield.
+    /// convex decomposition); not an oriented mesh.
     pub fn may_hold(obstacles: &[Obstacle]) -> bool {
         obstacles.iter().all(|o| {
             // parry knows balls, capsules, half-spaces and cuboids convex too.
@@ -184,8 +185,8 @@ impl LaneContacts {
     /// cuboid of half extents over [`BALL_MOTIONS`] times `motion` (a particle is
     /// put back through the nearest face, which must be the one it came
     /// in by), or another convex shape whose own box's half extents are
-    /// (a triangle, flat, is not held); a compound when each of its parts
-    /// is. The collision stage then need not run after a substep but the
+    /// (a triangle, flat, is not held), or a mesh or heightfield whatever
+    /// its size; a compound when each of its parts is. The collision stage then need not run after a substep but the
     /// last.
     pub fn holds(obstacles: &[Obstacle], motion: f32) -> bool {
         let deep = BALL_MOTIONS * motion;
@@ -262,9 +263,9 @@ impl LaneContacts {
         (thickness, motion): (f32, f32),
         lanes: usize,
     ) -> StillShape {
-        if let Some(mesh) = shape.as_trimesh() {
+        if let Some(surface) = Surface::of(shape) {
             let (slot, settle) = (self.slots(), SETTLE_SHARE * thickness);
-            let list = self.meshes.take((mesh, pose), (index, part), lanes);
+            let list = self.meshes.take((surface, pose), (index, part), lanes);
             return StillShape::Mesh(StillMesh::new(
                 (shape, pose),
                 (index, part, slot, list),
