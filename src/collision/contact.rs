@@ -1,6 +1,8 @@
 //! One point against one shape: closest surface point, outward normal, signed distance.
 
-use parry3d::shape::Shape;
+use parry3d::bounding_volume::Aabb;
+use parry3d::query::PointProjection;
+use parry3d::shape::{HeightField, Shape};
 
 use glam::{DMat3, DQuat, DVec3};
 
@@ -156,10 +158,14 @@ pub(crate) fn contact_prepared(
     }
 }
 
-/// Any shape through parry's `project_local_point`.
+/// Any shape through parry's `project_local_point` (a heightfield's
+/// through [`field_projection`]).
 fn general_contact(shape: &dyn Shape, pose: &Pose, point: Vector) -> Option<Contact> {
     let local = pose.inverse_transform_point(point);
-    let proj = shape.project_local_point(local, false);
+    let proj = match shape.as_heightfield() {
+        Some(field) => field_projection(field, local),
+        None => shape.project_local_point(local, false),
+    };
     let (surface, normal, signed) = if proj.point.is_finite() {
         let offset = local - proj.point;
         let len = offset.length();
@@ -359,6 +365,110 @@ fn cylinder_contact(
     }
 }
 
+/// The point of heightfield `field` nearest `local` (its frame), as
+/// parry's projection finds it (a box around the point, from the
+/// distance to the field's bounds plus a cell, four times wider until the
+/// nearest point in it lies within it; unsigned), each triangle's nearest
+/// point found directly: parry's triangle projection, with its features'
+/// bookkeeping, was a third of a cloth's frame on terrain (fortieth
+/// session, BENCHMARKS.md).
+fn field_projection(field: &HeightField, local: Vector) -> PointProjection {
+    let root = field.root_aabb();
+    let cell = field.cell_width().max(field.cell_height());
+    let farthest = (local - root.center()).length() + root.extents().length();
+    let to_bounds = (local - local.clamp(root.mins, root.maxs)).length();
+    let mut reach = (to_bounds + cell).max(farthest * 1.0e-4);
+    loop {
+        let wide = reach >= farthest;
+        let reach_now = reach.min(farthest);
+        let region = Aabb::new(
+            local - Vector::splat(reach_now),
+            local + Vector::splat(reach_now),
+        );
+        let mut best = (f32::INFINITY, local);
+        field.map_elements_in_local_aabb(&region, &mut |_, tri| {
+            // A triangle whose box is no nearer than the best is passed
+            // over (most of the box's, once the one under the point is
+            // found).
+            let (a, b, c) = (tri.a, tri.b, tri.c);
+            let outside = (a.min(b).min(c) - local).max(local - a.max(b).max(c));
+            if outside.max(Vector::ZERO).length_squared() >= best.0 {
+                return;
+            }
+            let q = nearest_on_triangle(local, (a, b, c));
+            let d2 = (local - q).length_squared();
+            if d2 < best.0 {
+                best = (d2, q);
+            }
+        });
+        if best.0 <= reach_now * reach_now || (wide && best.0.is_finite()) {
+            return PointProjection::new(false, best.1);
+        }
+        if wide || !reach.is_finite() {
+            // No triangle at all (every cell removed), or a point that is
+            // not finite: the point itself, as parry answers.
+            return PointProjection::new(false, local);
+        }
+        reach *= 4.0;
+    }
+}
+
+/// The point of triangle `abc` nearest `p` (Ericson, Real-Time Collision
+/// Detection, 5.1.5: by the Voronoi regions of its corners, edges and
+/// face).
+#[inline(always)]
+pub(crate) fn nearest_on_triangle(p: Vector, (a, b, c): (Vector, Vector, Vector)) -> Vector {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    if !denom.is_finite() {
+        // A triangle of no area: the nearest of its edges' points.
+        return [(a, b), (b, c), (c, a)]
+            .map(|(u, v)| {
+                let e = v - u;
+                let t = ((p - u).dot(e) / e.length_squared()).clamp(0.0, 1.0);
+                if t.is_finite() {
+                    u + e * t
+                } else {
+                    u
+                }
+            })
+            .into_iter()
+            .min_by(|x, y| {
+                (p - *x)
+                    .length_squared()
+                    .total_cmp(&(p - *y).length_squared())
+            })
+            .unwrap_or(a);
+    }
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
 /// Outward normal at a local point lying on the surface.
 fn surface_normal(shape: &dyn Shape, local: Vector) -> Option<Vector> {
     use parry3d::shape::ShapeType;
@@ -403,6 +513,7 @@ pub fn penetration_depth(shape: &dyn Shape, pose: &Pose, point: Vector) -> f32 {
 mod tests {
     use super::*;
     use crate::math::Rotation;
+    use parry3d::query::PointQuery;
     use parry3d::shape::{Capsule, Cuboid};
 
     /// `ours` at `p` is parry's contact: the same distance and surface
@@ -523,5 +634,47 @@ mod tests {
         assert!(capsule_contact(0.2, &prepared, on_axis).is_none());
         let hit = contact(shape, &pose, on_axis).unwrap();
         assert!((hit.signed_distance + 0.2).abs() < 1e-5, "{hit:?}");
+    }
+
+    /// A heightfield's contact (its projection found by
+    /// `field_projection`) is parry's, above it, below it, beyond its
+    /// border and far off; and a point that is not finite has none.
+    #[test]
+    fn heightfield_contacts_match_parry_above_below_and_beyond() {
+        let heights: Vec<f32> = (0..9 * 7)
+            .map(|k| 0.4 * ((k % 9) as f32 * 1.1).sin() * ((k / 9) as f32 * 0.8).cos())
+            .collect();
+        let field = HeightField::new(
+            parry3d::utils::Array2::new(9, 7, heights),
+            Vector::new(1.2, 1.5, 0.8),
+        );
+        let pose = Pose::from_parts(Vector::new(0.1, 0.5, -0.2), Rotation::from_rotation_z(0.3));
+        let mut checked = 0;
+        for i in 0..11 {
+            for j in 0..9 {
+                for k in 0..11 {
+                    let local = Vector::new(i as f32 - 5.0, j as f32 - 4.0, k as f32 - 5.0)
+                        * Vector::new(0.15, 0.25, 0.1);
+                    let p = pose.transform_point(local);
+                    let ours = contact(&field, &pose, p).unwrap();
+                    let proj = field.project_local_point(pose.inverse_transform_point(p), false);
+                    let offset = pose.inverse_transform_point(p) - proj.point;
+                    let parry = Contact {
+                        point: pose.transform_point(proj.point),
+                        normal: pose.transform_vector(offset.normalize()),
+                        signed_distance: offset.length(),
+                    };
+                    assert_same_contact(p, &ours, &parry);
+                    checked += 1;
+                }
+            }
+        }
+        // Far off: found by the widened search.
+        let far = Vector::new(30.0, 20.0, -10.0);
+        let ours = contact(&field, &pose, far).unwrap();
+        let proj = field.project_local_point(pose.inverse_transform_point(far), false);
+        assert!((ours.point - pose.transform_point(proj.point)).length() < 1e-4);
+        assert!(checked == 11 * 9 * 11);
+        assert!(contact(&field, &pose, Vector::NAN).is_none());
     }
 }

@@ -41,7 +41,7 @@ use parry3d::bounding_volume::Aabb;
 use parry3d::shape::{HeightField, Shape, TriMesh};
 
 use super::lane_convex::{convex_plane, HullFaces, StillConvex, NONE};
-use crate::collision::contact::{Analytic, PoseF64};
+use crate::collision::contact::{nearest_on_triangle, Analytic, PoseF64};
 use crate::collision::Obstacle;
 use crate::math::{Pose, Vector};
 use crate::parallel::Disjoint;
@@ -550,62 +550,6 @@ fn list_near(surface: Surface, at: Vector, radius: f32, listed: &mut [u32]) -> u
     } else {
         count as u8
     }
-}
-
-/// The point of triangle `abc` nearest `p` (Ericson, Real-Time Collision
-/// Detection, 5.1.5: by the Voronoi regions of its corners, edges and
-/// face).
-#[inline(always)]
-pub(super) fn nearest_on_triangle(p: Vector, (a, b, c): (Vector, Vector, Vector)) -> Vector {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return b;
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    }
-    let denom = 1.0 / (va + vb + vc);
-    if !denom.is_finite() {
-        // A triangle of no area: the nearest of its edges' points.
-        return [(a, b), (b, c), (c, a)]
-            .map(|(u, v)| {
-                let e = v - u;
-                let t = ((p - u).dot(e) / e.length_squared()).clamp(0.0, 1.0);
-                if t.is_finite() {
-                    u + e * t
-                } else {
-                    u
-                }
-            })
-            .into_iter()
-            .min_by(|x, y| {
-                (p - *x)
-                    .length_squared()
-                    .total_cmp(&(p - *y).length_squared())
-            })
-            .unwrap_or(a);
-    }
-    a + ab * (vb * denom) + ac * (vc * denom)
 }
 
 #[cfg(test)]
