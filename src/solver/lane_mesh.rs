@@ -368,21 +368,27 @@ pub(super) fn mesh_planes_of(
             continue;
         }
         let lane = &mut lists.lanes[k];
-        let listed = lane.count != UNLISTED && (s - lane.anchor).length() + reach <= lane.radius;
         // The face that held the lane last, while it has not moved so far
         // that another triangle could be nearer: a cloth lying on a mesh's
-        // faces takes its planes so, without a triangle's test.
-        if listed && (s - lane.at).length() < lane.valid {
+        // faces takes its planes so, without a triangle's test. The same
+        // bits as the search would give (`plane_from`), so that the planes
+        // do not depend on the lists (scratch): a solver restored from a
+        // snapshot moves the same. A lane within a hair of the reach
+        // searches, which decides it.
+        if (s - lane.at).length() < lane.valid {
             let d = lane.normal.dot(s) - lane.surface;
-            let plane = if d < reach {
-                held.plane(s, (lane.normal, lane.surface, d))
-            } else {
-                NONE
-            };
-            write(out, k, plane);
-            continue;
+            if (d - reach).abs() > BOUNDARY {
+                let plane = if d < reach {
+                    held.plane(s, (lane.normal, lane.surface, d))
+                } else {
+                    NONE
+                };
+                write(out, k, plane);
+                continue;
+            }
         }
         let local = mesh.pose.inverse_transform_point(s);
+        let listed = lane.count != UNLISTED && (s - lane.anchor).length() + reach <= lane.radius;
         if !listed {
             let radius = LIST_REACHES * reach;
             let triangles = &mut lists.triangles[k * LISTED..(k + 1) * LISTED];
@@ -391,28 +397,72 @@ pub(super) fn mesh_planes_of(
         }
         lane.valid = -1.0;
         let count = lane.count;
-        let ((d2, q), t) = if count == CROWDED {
+        let (nearest, face, triangles) = if count == CROWDED {
             // Too many to list: the triangles within reach, found now.
             let region = Aabb::new(local - Vector::splat(reach), local + Vector::splat(reach));
             let mut nearest = Nearest::new();
-            surface.each_near(&region, |t| nearest.consider(local, surface, t, 0));
-            (nearest.best, None)
+            // The triangles found kept for the face's pass (a second
+            // search of the tree when there are more).
+            let (mut found, mut count) = ([(0, None); 4 * LISTED], 0);
+            surface.each_near(&region, |t| {
+                let corners = surface.corners(t);
+                nearest.consider(local, t, corners);
+                if let Some(slot) = found.get_mut(count) {
+                    *slot = (t, corners);
+                }
+                count += 1;
+            });
+            let mut face = Face::new(&nearest);
+            if count <= found.len() {
+                found[..count]
+                    .iter()
+                    .for_each(|&(t, c)| face.consider(local, t, c));
+            } else {
+                surface.each_near(&region, |t| face.consider(local, t, surface.corners(t)));
+            }
+            (nearest, face, None)
         } else {
-            let triangles = &mut lists.triangles[k * LISTED..k * LISTED + count as usize];
+            let triangles = &lists.triangles[k * LISTED..k * LISTED + count as usize];
+            // Each triangle's corners once (a heightfield's are worked
+            // out from its heights each time they are asked for).
+            let mut corners = [None; LISTED];
+            for (c, &t) in corners.iter_mut().zip(triangles) {
+                *c = surface.corners(t);
+            }
+            let near = || triangles.iter().copied().zip(corners);
             let mut nearest = Nearest::new();
-            for (at, &t) in triangles.iter().enumerate() {
-                nearest.consider(local, surface, t, at);
-            }
-            // The nearest first next time: its distance then passes over
-            // most of the others at once.
-            if nearest.at < triangles.len() {
-                triangles.swap(0, nearest.at);
-            }
-            (nearest.best, Some(&*triangles))
+            near().for_each(|(t, c)| nearest.consider(local, t, c));
+            let mut face = Face::new(&nearest);
+            near().for_each(|(t, c)| face.consider(local, t, c));
+            (nearest, face, Some((triangles, corners)))
         };
+        let (d2, q) = nearest.best;
         // None within reach (or a distance that is not a number).
         if d2.is_nan() || d2 >= reach * reach {
             write(out, k, NONE);
+            continue;
+        }
+        if let Some((t, [a, b, c], normal_local, height)) = face.best {
+            // Inside a face: the face's plane, from its corners alone.
+            let normal = mesh.pose.rotation * normal_local;
+            let offset = normal.dot(mesh.pose.transform_point(a));
+            let d = normal.dot(s) - offset;
+            if let Some((triangles, corners)) = triangles {
+                // How far the lane may move with this face still the one:
+                // no farther than the list reaches past the face.
+                let listed_to = lane.radius - (s - lane.anchor).length();
+                let room = 0.5 * (listed_to - height);
+                let others = triangles.iter().copied().zip(corners);
+                if let Some(valid) = face_hold(local, (t, [a, b, c]), others, room) {
+                    (lane.at, lane.valid, lane.normal, lane.surface) = (s, valid, normal, offset);
+                }
+            }
+            let plane = if d < reach {
+                held.plane(s, (normal, offset, d))
+            } else {
+                NONE
+            };
+            write(out, k, plane);
             continue;
         }
         let d = d2.sqrt();
@@ -421,97 +471,168 @@ pub(super) fn mesh_planes_of(
             write(out, k, through_stage(s));
             continue;
         }
+        // Nearest an edge or a corner.
         let normal = mesh.pose.rotation * ((local - q) / d);
         let offset = normal.dot(mesh.pose.transform_point(q));
-        if let Some(triangles) = t {
-            // How far the lane may move with this plane still the nearest
-            // face's (none when the nearest point is on an edge).
-            let room = reach.min(lane.radius - reach - (s - lane.anchor).length());
-            if let Some(valid) = face_hold(local, surface, triangles, room) {
-                (lane.at, lane.valid, lane.normal, lane.surface) = (s, valid, normal, offset);
-            }
-        }
         write(out, k, held.plane(s, (normal, offset, d)));
     }
 }
 
-/// How far (m) a lane at `p` (the mesh's frame) may move with the first
-/// of `triangles` (its nearest) still the nearest and its nearest point
-/// still inside it (then the lane's plane is that face's), at most
-/// `room`: the least of how far `p`'s projection lies inside the
-/// triangle's edges, of its distance to the face, and of half the
-/// distance by which every other triangle not in the face's plane is
-/// farther. None when the nearest
-/// point is not inside the triangle (an edge's or a corner's), or no room.
-fn face_hold(p: Vector, surface: Surface, triangles: &[u32], room: f32) -> Option<f32> {
-    let (&first, others) = triangles.split_first()?;
-    let [a, b, c] = surface.corners(first)?;
+/// How far (m) a lane at `p` (the mesh's frame) may move with triangle
+/// `face` (its corners) still the face its plane is taken from
+/// ([`Face`]), at most
+/// `room`: less a hair ([`BOUNDARY`], for rounding) than the least of how
+/// far `p`'s projection lies inside the face's edges, of its distance to
+/// the face, and of half the distance by which each other of `triangles`
+/// (and their corners) not in the face's plane is farther. None when there is no room.
+fn face_hold(
+    p: Vector,
+    (face, [a, b, c]): (u32, [Vector; 3]),
+    triangles: impl Iterator<Item = (u32, Option<[Vector; 3]>)>,
+    room: f32,
+) -> Option<f32> {
+    let (_, height, inside) = face_of(p, [a, b, c])?;
+    let normal = (b - a).cross(c - a).normalize();
+    let mut valid = room.min(height).min(inside);
+    for (t, corners) in triangles {
+        let Some([a2, b2, c2]) = corners else {
+            continue;
+        };
+        // A triangle of the same plane (the face itself among them) is
+        // never nearer than the face while the lane's projection is
+        // inside it, nor a face the projection is inside.
+        let flat = |v: Vector| (normal.dot(v - a)).abs() <= 1.0e-6;
+        if t == face || (flat(a2) && flat(b2) && flat(c2)) {
+            continue;
+        }
+        // Exact, not its box's: a tilted neighbour's box reaches over
+        // the face (terrain kept no face so).
+        let beyond = (nearest_on_triangle(p, (a2, b2, c2)) - p).length();
+        valid = valid.min(0.5 * (beyond - height));
+    }
+    let valid = valid - BOUNDARY;
+    (valid > 0.0).then_some(valid)
+}
+
+/// Where `p` (m) is against the face of triangle `abc` (the same frame),
+/// when its projection onto the face's plane lies inside the triangle:
+/// the face's unit normal on `p`'s side, `p`'s height above the face (m),
+/// and how far inside the triangle's edges its projection lies (m).
+#[inline(always)]
+fn face_of(p: Vector, [a, b, c]: [Vector; 3]) -> Option<(Vector, f32, f32)> {
     let normal = (b - a).cross(c - a).normalize();
     if !normal.is_finite() {
         return None;
     }
     let height = normal.dot(p - a);
     let on = p - normal * height;
-    let mut valid = room.min(height.abs());
+    let mut inside = f32::INFINITY;
     for (u, v) in [(a, b), (b, c), (c, a)] {
         // Inward across the edge, in the face's plane.
         let inward = normal.cross(v - u).normalize();
-        valid = valid.min(inward.dot(on - u));
+        inside = inside.min(inward.dot(on - u));
     }
-    for &t in others {
-        let Some([a2, b2, c2]) = surface.corners(t) else {
-            continue;
-        };
-        // A triangle of the same plane is never nearer than the face while
-        // the lane's projection is inside it, and would give the same plane.
-        let flat = |v: Vector| (normal.dot(v - a)).abs() <= 1.0e-6;
-        if flat(a2) && flat(b2) && flat(c2) {
-            continue;
+    let side = if height >= 0.0 { normal } else { -normal };
+    (inside > 0.0).then_some((side, height.abs(), inside))
+}
+
+/// Within this (m) of a kept face's guards, and of the reach, a lane
+/// searches: rounding then cannot make the search's answer differ from the
+/// kept face's.
+const BOUNDARY: f32 = 1.0e-5;
+
+/// The face a lane's plane is taken from, once [`Nearest`] has found the
+/// nearest distance: of the triangles whose face holds the lane's
+/// projection and lies no farther than that distance (and a hair), the
+/// one of least index. Two coplanar triangles beside each other are as
+/// near within rounding where the lane's projection is near their common
+/// edge, and the nearest by distance could be either; the one whose face
+/// holds the projection is one only.
+struct Face {
+    /// How far (m) a face may be: the nearest distance and a hair.
+    within: f32,
+    /// The face: its triangle and corners, unit normal on the lane's
+    /// side, and the lane's height above it (m).
+    best: Option<(u32, [Vector; 3], Vector, f32)>,
+}
+
+impl Face {
+    fn new(nearest: &Nearest) -> Face {
+        Face {
+            within: nearest.best.0.sqrt() + 1.0e-6,
+            best: None,
         }
-        // Exact, not its box's: a tilted neighbour's box reaches over
-        // the face (terrain kept no face so).
-        let beyond = (nearest_on_triangle(p, (a2, b2, c2)) - p).length();
-        valid = valid.min(0.5 * (beyond - height.abs()));
     }
-    (valid > 0.0).then_some(valid)
+
+    /// Considers triangle `t` (its `corners`, none for a removed cell)
+    /// for `p` (m, the surface's frame).
+    #[inline(always)]
+    fn consider(&mut self, p: Vector, t: u32, corners: Option<[Vector; 3]>) {
+        if self.best.is_some_and(|(b, ..)| b < t) || !self.within.is_finite() {
+            return;
+        }
+        let Some(corners) = corners else {
+            return;
+        };
+        let [a, b, c] = corners;
+        let outside = (a.min(b).min(c) - p).max(p - a.max(b).max(c));
+        if outside.max(Vector::ZERO).length() > self.within {
+            return;
+        }
+        // Inside the triangle's edges (by signs, without a root: most
+        // triangles tested here are the nearest's neighbours, outside).
+        let across = (b - a).cross(c - a);
+        let inside = [(a, b), (b, c), (c, a)]
+            .iter()
+            .all(|&(u, v)| across.cross(v - u).dot(p - u) > 0.0);
+        if !inside {
+            return;
+        }
+        let normal = across.normalize();
+        let height = normal.dot(p - a);
+        if normal.is_finite() && height.abs() <= self.within {
+            let side = if height >= 0.0 { normal } else { -normal };
+            self.best = Some((t, corners, side, height.abs()));
+        }
+    }
 }
 
 /// The nearest point to a lane's start among triangles considered one
-/// by one.
+/// by one, in any order: of equals, the triangle of least index (the
+/// answer does not depend on the list's order or length).
 struct Nearest {
     /// Its squared distance (m², infinite before any) and the point (m).
     best: (f32, Vector),
-    /// The place of its triangle among those considered (the first of
-    /// equals).
-    at: usize,
+    /// Its triangle.
+    triangle: u32,
 }
 
 impl Nearest {
     fn new() -> Nearest {
         Nearest {
             best: (f32::INFINITY, Vector::ZERO),
-            at: 0,
+            triangle: u32::MAX,
         }
     }
 
-    /// Considers triangle `t` of `surface`, at place `at`, for `p` (m,
-    /// the surface's frame).
+    /// Considers triangle `t` (its `corners`, none for a removed cell)
+    /// for `p` (m, the surface's frame).
     #[inline(always)]
-    fn consider(&mut self, p: Vector, surface: Surface, t: u32, at: usize) {
-        let Some([a, b, c]) = surface.corners(t) else {
+    fn consider(&mut self, p: Vector, t: u32, corners: Option<[Vector; 3]>) {
+        let Some([a, b, c]) = corners else {
             return;
         };
         // The box around the triangle is no farther than the triangle:
-        // a triangle whose box is no nearer than the best is passed over
+        // a triangle whose box is farther than the best is passed over
         // (the one beside the nearest on a flat face, mostly).
         let outside = (a.min(b).min(c) - p).max(p - a.max(b).max(c));
-        if outside.max(Vector::ZERO).length_squared() >= self.best.0 {
+        if outside.max(Vector::ZERO).length_squared() > self.best.0 {
             return;
         }
         let q = nearest_on_triangle(p, (a, b, c));
         let d2 = (p - q).length_squared();
-        if d2 < self.best.0 {
-            (self.best, self.at) = ((d2, q), at);
+        if d2 < self.best.0 || (d2 == self.best.0 && t < self.triangle) {
+            (self.best, self.triangle) = ((d2, q), t);
         }
     }
 }
@@ -705,7 +826,25 @@ mod tests {
                     p + Vector::new(0.3, -0.5, 0.2) * (0.002 * round as f32 * (k % 3) as f32)
                 })
                 .collect();
-            for (k, [ours, stage]) in planes(o, &mesh, &mut lists, &moved).into_iter().enumerate() {
+            let warm = planes(o, &mesh, &mut lists, &moved);
+            // The same bits from fresh lists (a solver restored from a
+            // snapshot): the kept faces give what a search gives.
+            let mut fresh = MeshLists::default();
+            fresh.take(
+                (Surface::of(&*o.shape).unwrap(), &o.pose),
+                (0, None),
+                points.len(),
+            );
+            let cold = planes(o, &mesh, &mut fresh, &moved);
+            for (k, ([w, _], [c, _])) in warm.iter().zip(&cold).enumerate() {
+                let bits = |(n, d): Plane| (n.map(f32::to_bits), d.to_bits());
+                assert_eq!(
+                    bits(*w),
+                    bits(*c),
+                    "{round} {k}: kept {w:?}, searched {c:?}"
+                );
+            }
+            for (k, [ours, stage]) in warm.into_iter().enumerate() {
                 // At the reach, either may have a plane by a rounding.
                 let signed = contact(&*o.shape, &o.pose, moved[k]).map(|c| c.signed_distance);
                 if signed.is_some_and(|d| (d - mesh.held.reach()).abs() < 1e-5) {
