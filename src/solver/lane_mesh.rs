@@ -28,8 +28,16 @@
 //! inside a triangle keeps that face's plane while it moves less than
 //! what would let its projection leave the face or another triangle come
 //! nearer ([`face_hold`]). A 64² tablecloth on that box: 59 → 8–10 ms a
-//! frame, 91% of its planes from the face kept (thirty-ninth session's
-//! host, fortieth session, BENCHMARKS.md).
+//! frame, 91% of its planes from the face kept (fortieth session,
+//! BENCHMARKS.md).
+//!
+//! The lists and kept faces are scratch, so the planes must not depend on
+//! them: the search answers by a rule of the lane's start alone (the face
+//! of least index that holds its projection and is as near as the
+//! nearest, [`Face`]; else the nearest point, of the triangle of least
+//! index among equals, [`Nearest`]), and a kept face gives the same bits
+//! while it is kept, a hair inside its guards ([`BOUNDARY`]). A solver
+//! restored from a snapshot, with fresh lists, moves the cloth the same.
 //!
 //! A mesh can be concave, where a tangent plane of one part may cut
 //! another: a lane in an inner corner is held by the nearer of the two
