@@ -309,12 +309,7 @@ fn a_tablecloth_dropped_on_a_compound_table_drapes_over_it() {
     }
     let mut world = PhysicsWorld::new();
     world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::compound(parts));
-    // How far a point is inside the top (m; 0 outside).
-    let inside = |p: Vector| {
-        let d = Vector::new(half, thick, half) - (p - Vector::new(0.0, top - thick, 0.0)).abs();
-        d.min_element().max(0.0)
-    };
-    drapes_over_the_table(&mut world, (1.1, top), inside);
+    drapes_over_the_table(&mut world, (1.1, top), inside_square_top(half, thick, top));
 }
 
 /// A table imported as a model: its top a triangle mesh (a box, each face
@@ -336,12 +331,74 @@ fn a_tablecloth_dropped_on_a_mesh_table_drapes_over_it() {
         RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.36, 0.0)),
         ColliderBuilder::cuboid(0.04, 0.36, 0.04),
     );
-    // How far a point is inside the top (m; 0 outside).
-    let inside = |p: Vector| {
-        let d = Vector::new(half, thick, half) - (p - Vector::new(0.0, top - thick, 0.0)).abs();
-        d.min_element().max(0.0)
-    };
-    drapes_over_the_table(&mut world, (1.1, top), inside);
+    drapes_over_the_table(&mut world, (1.1, top), inside_square_top(half, thick, top));
+}
+
+/// A cloth dropped into a tray imported as a mesh (a floor and four low
+/// walls, open at the top: inner corners where two faces meet) with the
+/// defaults: a lane near a corner is held by the nearer face each
+/// substep. No particle ends outside the tray or under its floor, none
+/// goes through a wall in any frame, and the cloth stretches under 5%.
+#[test]
+fn a_cloth_dropped_into_a_mesh_tray_stays_in_it() {
+    // Floor 0.8 m square at y = 0, walls 0.15 m high, as two triangles a
+    // face (corners: floor 0-3, wall tops 4-7).
+    let (h, wall) = (0.4, 0.15);
+    let vertices = vec![
+        Vector::new(-h, 0.0, -h),
+        Vector::new(h, 0.0, -h),
+        Vector::new(h, 0.0, h),
+        Vector::new(-h, 0.0, h),
+        Vector::new(-h, wall, -h),
+        Vector::new(h, wall, -h),
+        Vector::new(h, wall, h),
+        Vector::new(-h, wall, h),
+    ];
+    let indices = vec![
+        [0, 2, 1],
+        [0, 3, 2],
+        [0, 1, 5],
+        [0, 5, 4],
+        [1, 2, 6],
+        [1, 6, 5],
+        [2, 3, 7],
+        [2, 7, 6],
+        [3, 0, 4],
+        [3, 4, 7],
+    ];
+    let mut world = PhysicsWorld::new();
+    world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::trimesh(vertices, indices).expect("a mesh"),
+    );
+    // A cloth a little narrower than the tray, falling flat into it: its
+    // border lands in the inner corners along the walls.
+    let mut sim = Simulation::new(
+        ClothBuilder::new(32, 32)
+            .size(0.76, 0.76)
+            .horizontal(Vector::new(0.0, 0.3, 0.0))
+            .material(Material::cotton())
+            .build()
+            .unwrap(),
+    );
+    let mut worst = 0.0f32;
+    for frame in 0..120 {
+        run(&mut sim, &mut world, 1);
+        worst = worst.max(sim.max_strain(SpringKind::Stretch));
+        for (i, p) in sim.positions().iter().enumerate() {
+            let inside = p.x.abs() < h && p.z.abs() < h && p.y > -0.001;
+            assert!(
+                inside,
+                "frame {frame}: particle {i} at {p}, out of the tray"
+            );
+        }
+    }
+    assert!(worst < 0.05, "stretched {worst}");
+    let lowest = sim.positions().iter().map(|p| p.y).fold(f32::MAX, f32::min);
+    assert!(
+        (0.0..0.02).contains(&lowest),
+        "lowest particle at {lowest} m"
+    );
 }
 
 /// A cloth dropped on hilly terrain (a rapier heightfield, fixed) with
@@ -432,6 +489,16 @@ fn box_mesh(h: Vector, k: usize) -> (Vec<Vector>, Vec<[u32; 3]>) {
     face(-h, z, y);
     face(-h + x, y, z);
     (vertices, indices)
+}
+
+/// How far a point is inside a square table top (m; 0 outside): `half`
+/// its half width, `thick` its half thickness, `top` the height of its
+/// surface (m).
+fn inside_square_top(half: f32, thick: f32, top: f32) -> impl Fn(Vector) -> f32 {
+    move |p: Vector| {
+        let d = Vector::new(half, thick, half) - (p - Vector::new(0.0, top - thick, 0.0)).abs();
+        d.min_element().max(0.0)
+    }
 }
 
 /// Drops a 40 × 40 cotton tablecloth `size` (m) wide, with the crate's
