@@ -156,15 +156,8 @@ fn a_tablecloth_dropped_on_a_table_drapes_without_stretching() {
             RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.35, 0.0)),
             ColliderBuilder::cuboid(0.05, 0.35, 0.05),
         );
-        let mut sim = Simulation::new(
-            ClothBuilder::new(48, 48)
-                .size(1.4, 1.4)
-                .horizontal(Vector::new(0.0, 0.95, 0.0))
-                .material(Material::cotton())
-                .build()
-                .unwrap(),
-        )
-        .with_integrator(integrator);
+        let mut sim =
+            cotton_sheet(48, 1.4, Vector::new(0.0, 0.95, 0.0)).with_integrator(integrator);
         // In every frame: over the table's corners the contacts push the
         // cloth out along the corner's normal, away from its neighbours,
         // and the stretch limit must hold against them. Implicit Euler's
@@ -373,14 +366,7 @@ fn a_cloth_dropped_into_a_mesh_tray_stays_in_it() {
     );
     // A cloth a little narrower than the tray, falling flat into it: its
     // border lands in the inner corners along the walls.
-    let mut sim = Simulation::new(
-        ClothBuilder::new(32, 32)
-            .size(0.76, 0.76)
-            .horizontal(Vector::new(0.0, 0.3, 0.0))
-            .material(Material::cotton())
-            .build()
-            .unwrap(),
-    );
+    let mut sim = cotton_sheet(32, 0.76, Vector::new(0.0, 0.3, 0.0));
     let mut worst = 0.0f32;
     for frame in 0..120 {
         run(&mut sim, &mut world, 1);
@@ -428,14 +414,7 @@ fn a_cloth_dropped_on_hilly_terrain_rests_on_it() {
             .expect("over the ground");
         10.0 - toi
     };
-    let mut sim = Simulation::new(
-        ClothBuilder::new(40, 40)
-            .size(1.2, 1.2)
-            .horizontal(Vector::new(0.1, 0.5, 0.0))
-            .material(Material::cotton())
-            .build()
-            .unwrap(),
-    );
+    let mut sim = cotton_sheet(40, 1.2, Vector::new(0.1, 0.5, 0.0));
     assert_eq!(sim.solver.settings.integrator, Integrator::Xpbd);
     let (mut worst, mut deepest) = (0.0f32, 0.0f32);
     for _ in 0..150 {
@@ -491,6 +470,18 @@ fn box_mesh(h: Vector, k: usize) -> (Vec<Vector>, Vec<[u32; 3]>) {
     (vertices, indices)
 }
 
+/// A cotton sheet of `n × n` particles, `size` (m) square, lying flat
+/// with its centre at `at` (m), with the crate's defaults.
+fn cotton_sheet(n: usize, size: f32, at: Vector) -> Simulation {
+    let cloth = ClothBuilder::new(n, n)
+        .size(size, size)
+        .horizontal(at)
+        .material(Material::cotton())
+        .build()
+        .unwrap();
+    Simulation::new(cloth)
+}
+
 /// How far a point is inside a square table top (m; 0 outside): `half`
 /// its half width, `thick` its half thickness, `top` the height of its
 /// surface (m).
@@ -512,14 +503,7 @@ fn drapes_over_the_table(
     (size, top): (f32, f32),
     inside: impl Fn(Vector) -> f32,
 ) {
-    let mut sim = Simulation::new(
-        ClothBuilder::new(40, 40)
-            .size(size, size)
-            .horizontal(Vector::new(0.0, top + 0.2, 0.0))
-            .material(Material::cotton())
-            .build()
-            .unwrap(),
-    );
+    let mut sim = cotton_sheet(40, size, Vector::new(0.0, top + 0.2, 0.0));
     assert_eq!(sim.solver.settings.integrator, Integrator::Xpbd);
     let (mut worst, mut deepest) = (0.0f32, 0.0f32);
     for _ in 0..150 {
