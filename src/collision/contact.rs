@@ -369,7 +369,7 @@ fn cylinder_contact(
 /// parry's projection finds it (a box around the point, from the
 /// distance to the field's bounds plus a cell, four times wider until the
 /// nearest point in it lies within it; unsigned), each triangle's nearest
-/// point found directly: parry's triangle projection, with its features'
+/// point found directly ([`Nearest`]): parry's triangle projection, with its features'
 /// bookkeeping, was a third of a cloth's frame on terrain (fortieth
 /// session, BENCHMARKS.md).
 fn field_projection(field: &HeightField, local: Vector) -> PointProjection {
@@ -385,22 +385,11 @@ fn field_projection(field: &HeightField, local: Vector) -> PointProjection {
             local - Vector::splat(reach_now),
             local + Vector::splat(reach_now),
         );
-        let mut best = (f32::INFINITY, local);
-        field.map_elements_in_local_aabb(&region, &mut |_, tri| {
-            // A triangle whose box is no nearer than the best is passed
-            // over (most of the box's, once the one under the point is
-            // found).
-            let (a, b, c) = (tri.a, tri.b, tri.c);
-            let outside = (a.min(b).min(c) - local).max(local - a.max(b).max(c));
-            if outside.max(Vector::ZERO).length_squared() >= best.0 {
-                return;
-            }
-            let q = nearest_on_triangle(local, (a, b, c));
-            let d2 = (local - q).length_squared();
-            if d2 < best.0 {
-                best = (d2, q);
-            }
+        let mut nearest = Nearest::new();
+        field.map_elements_in_local_aabb(&region, &mut |t, tri| {
+            nearest.consider(local, t, Some([tri.a, tri.b, tri.c]));
         });
+        let best = nearest.best;
         if best.0 <= reach_now * reach_now || (wide && best.0.is_finite()) {
             return PointProjection::new(false, best.1);
         }
@@ -410,6 +399,47 @@ fn field_projection(field: &HeightField, local: Vector) -> PointProjection {
             return PointProjection::new(false, local);
         }
         reach *= 4.0;
+    }
+}
+
+/// The nearest point to a point among triangles considered one by one
+/// (a heightfield's for the stage, a mesh's for the lanes' planes), in
+/// any order: of equals, the triangle of least index (the answer does not
+/// depend on the order or the number of those considered).
+pub(crate) struct Nearest {
+    /// Its squared distance (m², infinite before any) and the point (m).
+    pub(crate) best: (f32, Vector),
+    /// Its triangle.
+    triangle: u32,
+}
+
+impl Nearest {
+    pub(crate) fn new() -> Nearest {
+        Nearest {
+            best: (f32::INFINITY, Vector::ZERO),
+            triangle: u32::MAX,
+        }
+    }
+
+    /// Considers triangle `t` (its `corners`, none for a removed cell)
+    /// for `p` (m, the triangles' frame).
+    #[inline(always)]
+    pub(crate) fn consider(&mut self, p: Vector, t: u32, corners: Option<[Vector; 3]>) {
+        let Some([a, b, c]) = corners else {
+            return;
+        };
+        // The box around the triangle is no farther than the triangle:
+        // a triangle whose box is farther than the best is passed over
+        // (most of them once the one under the point is found).
+        let outside = (a.min(b).min(c) - p).max(p - a.max(b).max(c));
+        if outside.max(Vector::ZERO).length_squared() > self.best.0 {
+            return;
+        }
+        let q = nearest_on_triangle(p, (a, b, c));
+        let d2 = (p - q).length_squared();
+        if d2 < self.best.0 || (d2 == self.best.0 && t < self.triangle) {
+            (self.best, self.triangle) = ((d2, q), t);
+        }
     }
 }
 

@@ -49,7 +49,7 @@ use parry3d::bounding_volume::Aabb;
 use parry3d::shape::{HeightField, Shape, TriMesh};
 
 use super::lane_convex::{convex_plane, HullFaces, StillConvex, NONE};
-use crate::collision::contact::{nearest_on_triangle, Analytic, PoseF64};
+use crate::collision::contact::{nearest_on_triangle, Analytic, Nearest, PoseF64};
 use crate::collision::Obstacle;
 use crate::math::{Pose, Vector};
 use crate::parallel::Disjoint;
@@ -601,46 +601,6 @@ impl Face {
         if normal.is_finite() && height.abs() <= self.within {
             let side = if height >= 0.0 { normal } else { -normal };
             self.best = Some((t, corners, side, height.abs()));
-        }
-    }
-}
-
-/// The nearest point to a lane's start among triangles considered one
-/// by one, in any order: of equals, the triangle of least index (the
-/// answer does not depend on the list's order or length).
-struct Nearest {
-    /// Its squared distance (m², infinite before any) and the point (m).
-    best: (f32, Vector),
-    /// Its triangle.
-    triangle: u32,
-}
-
-impl Nearest {
-    fn new() -> Nearest {
-        Nearest {
-            best: (f32::INFINITY, Vector::ZERO),
-            triangle: u32::MAX,
-        }
-    }
-
-    /// Considers triangle `t` (its `corners`, none for a removed cell)
-    /// for `p` (m, the surface's frame).
-    #[inline(always)]
-    fn consider(&mut self, p: Vector, t: u32, corners: Option<[Vector; 3]>) {
-        let Some([a, b, c]) = corners else {
-            return;
-        };
-        // The box around the triangle is no farther than the triangle:
-        // a triangle whose box is farther than the best is passed over
-        // (the one beside the nearest on a flat face, mostly).
-        let outside = (a.min(b).min(c) - p).max(p - a.max(b).max(c));
-        if outside.max(Vector::ZERO).length_squared() > self.best.0 {
-            return;
-        }
-        let q = nearest_on_triangle(p, (a, b, c));
-        let d2 = (p - q).length_squared();
-        if d2 < self.best.0 || (d2 == self.best.0 && t < self.triangle) {
-            (self.best, self.triangle) = ((d2, q), t);
         }
     }
 }
