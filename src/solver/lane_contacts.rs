@@ -186,8 +186,8 @@ impl LaneContacts {
     /// put back through the nearest face, which must be the one it came
     /// in by), or another convex shape whose own box's half extents are
     /// (a triangle, flat, is not held), or a mesh or heightfield whatever
-    /// its size; a compound when each of its parts is. The collision stage then need not run after a substep but the
-    /// last.
+    /// its size; a compound when each of its parts is. The collision
+    /// stage then need not run after a substep but the last.
     pub fn holds(obstacles: &[Obstacle], motion: f32) -> bool {
         let deep = BALL_MOTIONS * motion;
         !obstacles.is_empty()
