@@ -379,7 +379,7 @@ pub(super) fn mesh_planes_of(
         // The face that held the lane last, while it has not moved so far
         // that another triangle could be nearer: a cloth lying on a mesh's
         // faces takes its planes so, without a triangle's test. The same
-        // bits as the search would give (`plane_from`), so that the planes
+        // bits as the search below would give, so that the planes
         // do not depend on the lists (scratch): a solver restored from a
         // snapshot moves the same. A lane within a hair of the reach
         // searches, which decides it.
