@@ -185,6 +185,68 @@ fn a_tablecloth_dropped_on_a_table_drapes_without_stretching() {
     }
 }
 
+/// A 1 kg ball dropped on a tablecloth lying on a table: the cloth
+/// between them cannot make room, so the table must hold the ball up
+/// through it. The ball sank into the cloth before, squeezing it out
+/// sideways (9% stretched under it, 200 ms a frame at 64²).
+#[test]
+fn a_ball_dropped_on_a_laid_table_rests_on_the_cloth() {
+    let mut world = PhysicsWorld::new();
+    // A table top 0.9 × 0.9 m at y = 0.75, on a leg.
+    world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.73, 0.0)),
+        ColliderBuilder::cuboid(0.45, 0.02, 0.45),
+    );
+    world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.36, 0.0)),
+        ColliderBuilder::cylinder(0.36, 0.04),
+    );
+    let (ball, _) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.1, 1.4, 0.05)),
+        ColliderBuilder::ball(0.08).mass(1.0),
+    );
+    let mut sim = cotton_sheet(40, 1.2, Vector::new(0.0, 0.95, 0.0));
+    let inside = inside_square_top(0.45, 0.02, 0.75);
+    let (mut worst, mut deepest) = (0.0f32, 0.0f32);
+    for _ in 0..150 {
+        run(&mut sim, &mut world, 1);
+        worst = worst.max(sim.max_strain(SpringKind::Stretch));
+        deepest = sim
+            .positions()
+            .iter()
+            .map(|&p| inside(p))
+            .fold(deepest, f32::max);
+    }
+    assert!(worst < 0.05, "stretched {worst}");
+    assert!(deepest <= 0.001, "{deepest} m inside the top");
+    // At rest on the cloth, over the table: its bottom the cloth's two
+    // layers of thickness (1 cm each) above the top, within a few mm.
+    let body = &world.bodies[ball];
+    let (at, thickness) = (body.translation(), sim.cloth.params.thickness);
+    let bottom = at.y - 0.08;
+    assert!(
+        (bottom - (0.75 + 2.0 * thickness)).abs() < 0.005,
+        "the ball's bottom at {bottom}"
+    );
+    assert!(at.x.abs() < 0.4 && at.z.abs() < 0.4, "the ball at {at}");
+    assert!(
+        body.linvel().length() < 0.1,
+        "still moving: {}",
+        body.linvel()
+    );
+    // The cloth under it lies on the top.
+    let lowest_under = sim
+        .positions()
+        .iter()
+        .filter(|p| (Vector::new(p.x, 0.0, p.z) - Vector::new(at.x, 0.0, at.z)).length() < 0.03)
+        .map(|p| p.y)
+        .fold(f32::MAX, f32::min);
+    assert!(
+        (lowest_under - (0.75 + thickness)).abs() < 0.003,
+        "the cloth under it at {lowest_under}"
+    );
+}
+
 /// The same refusal through the core API: a dynamic body among the obstacles.
 #[test]
 fn large_step_integrators_refuse_dynamic_obstacles_and_step_without_them() {

@@ -11,6 +11,7 @@
 //! Self-collision keeps the cloth's own layers a thickness apart
 //! ([`SelfContacts`]); [`self_intersections`] counts where they are not.
 
+mod backing;
 pub(crate) mod contact;
 mod contact_planes;
 mod contact_set;

@@ -8,6 +8,7 @@
 
 use parry3d::query::Ray;
 
+use super::backing::Backed;
 use super::contact::Contact;
 use super::contact_set::{ContactRange, ParticleContact, NONE};
 use super::obstacle::{Obstacle, ObstacleImpulse};
@@ -45,7 +46,14 @@ pub(super) struct BlockScratch {
     pub pinned_close: bool,
     /// The farthest (squared, m²) this pass moved a particle of the block.
     pub shift2: f32,
+    /// Particles of the block pressed by a dynamic body against an
+    /// immovable obstacle, in particle order ([`Backed`]).
+    pub backed: Vec<Backed>,
 }
+
+/// Two contact normals at least this opposed (the cosine of the angle
+/// between them at most its negative) press a particle between them.
+const OPPOSED: f32 = 0.5;
 
 /// What a block of the pass writes, indexed from the block's first particle:
 /// positions (m) and velocities (m/s); the nearest obstacle (`NONE` for
@@ -89,6 +97,7 @@ impl ParticlePass<'_> {
         scratch.drift2 = 0.0;
         scratch.pinned_close = false;
         scratch.shift2 = 0.0;
+        scratch.backed.clear();
         scratch.impulses.clear();
         scratch
             .impulses
@@ -130,6 +139,8 @@ impl ParticlePass<'_> {
             .tracks
             .gather_particle(i, out.x[k], &mut scratch.candidates);
         let mut nearest_distance = f32::INFINITY;
+        // The last immovable obstacle and the last dynamic body touched.
+        let (mut immovable, mut dynamic) = (None, None);
         for c in 0..scratch.candidates.len() {
             let o = scratch.candidates[c] as usize;
             // Beyond the reach of the contact and the edge pass: as if
@@ -159,11 +170,21 @@ impl ParticlePass<'_> {
                 let (contact, (point, j)) =
                     self.resolve(i, (&mut out.x[k], &mut out.v[k]), (o, hit));
                 out.contacts.touch(k, &contact);
+                if contact.immovable {
+                    immovable = Some((o, contact.normal, contact.surface_velocity));
+                } else {
+                    dynamic = Some((o, contact.normal));
+                }
                 let sum = &mut scratch.impulses[o];
                 sum.linear += j;
                 sum.angular_about_origin += point.cross(j);
                 sum.contacts += 1;
                 contacts += 1;
+            }
+        }
+        if let (Some(s), Some(d)) = (immovable, dynamic) {
+            if s.1.dot(d.1) < -OPPOSED {
+                self.back(k, (s.0, d.0, s.2), out, scratch);
             }
         }
         if !cached && out.nearest[k] != NONE {
@@ -175,6 +196,36 @@ impl ParticlePass<'_> {
         scratch.drift2 = scratch.drift2.max(self.tracks.drift2(i, out.x[k]));
         scratch.shift2 = scratch.shift2.max((out.x[k] - before).length_squared());
         contacts
+    }
+
+    /// Records the block's `k`th particle as pressed by dynamic body `d`
+    /// against immovable obstacle `s` when their thickness layers overlap
+    /// where it ended ([`Backed`]): by how much, whichever of the two
+    /// pushed it last; the immovable surface moves at `held` (m/s) there.
+    fn back(
+        &self,
+        k: usize,
+        (s, d, held): (usize, usize, Vector),
+        out: &BlockOut,
+        scratch: &mut BlockScratch,
+    ) {
+        let x = out.x[k];
+        let (Some(on_s), Some(on_d)) = (
+            self.tracks.contact(self.obstacles, s, x),
+            self.tracks.contact(self.obstacles, d, x),
+        ) else {
+            return;
+        };
+        let depth = 2.0 * self.ctx.thickness - (on_s.signed_distance + on_d.signed_distance);
+        if depth > 0.0 && depth.is_finite() {
+            scratch.backed.push(Backed {
+                obstacle: d as u32,
+                point: x,
+                normal: -on_s.normal,
+                depth,
+                velocity: held,
+            });
+        }
     }
 
     /// The contact with obstacle `o` of a particle now at `x` that started

@@ -5,6 +5,7 @@
 
 use parry3d::bounding_volume::Aabb;
 
+use super::backing::{support_backed, Backed};
 use super::contact_set::{ContactSet, ParticleContact, NONE};
 use super::obstacle::{Obstacle, ObstacleImpulse};
 use super::particle_pass::{BlockOut, BlockScratch, ParticlePass, BLOCK, CONTACT_SLACK};
@@ -152,6 +153,11 @@ pub struct CollisionStage {
     pub(super) hold_watch: Vec<u64>,
     /// Per block of the particle pass: its scratch.
     blocks: Vec<BlockScratch>,
+    /// The particles a dynamic body presses against an immovable
+    /// obstacle, by body (scratch of [`Self::resolve`]).
+    backed: Vec<Backed>,
+    /// The impulses (N·s) of the backed particles' support (scratch).
+    support: Vec<f32>,
     /// Per block of [`EDGE_BLOCK`] springs: those the edge pass must look at.
     edge_blocks: Vec<EdgeList>,
     /// The stretch and shear springs that may come near an obstacle this
@@ -444,6 +450,18 @@ impl CollisionStage {
                     imp.contacts += sum.contacts;
                 }
             }
+        }
+        // Bodies pressing particles against immovable obstacles are held
+        // up by them (in block and particle order: the same
+        // bits on any number of threads).
+        self.backed.clear();
+        for block in &self.blocks[..blocks] {
+            self.backed.extend_from_slice(&block.backed);
+        }
+        if !self.backed.is_empty() {
+            let (h, dt) = (ctx.h, ctx.dt);
+            let (tracks, support) = (&mut self.tracks, &mut self.support);
+            support_backed(tracks, obstacles, &self.backed, (h, dt), support);
         }
         // A stray particle may meet an obstacle along any spring.
         let watched = strays == 0 && !self.tracks.cache_is_empty();

@@ -7,7 +7,7 @@ use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 
 use super::contact::{contact_prepared, Analytic, Contact, PoseF64};
-use super::obstacle::{Obstacle, ObstacleImpulse};
+use super::obstacle::{DynamicBody, Obstacle, ObstacleImpulse};
 use super::one_obstacle::{LaneShape, OneObstacleLaw};
 use crate::math::{Pose, Rotation, Vector};
 
@@ -353,6 +353,26 @@ impl ObstacleTracks {
     pub(super) fn surely_beyond(&self, o: usize, point: Vector, distance: f32) -> bool {
         let (center, radius) = (self.centers[o], self.bounds[o].1);
         (point - center).length_squared() > (radius + distance) * (radius + distance)
+    }
+
+    /// Dynamic obstacle `o`'s (its `body`'s) velocity and angular
+    /// velocity over the next substep of `h` seconds, as
+    /// [`Self::advance_to`] will give them (with the momentum handed to it
+    /// since the last), and its centre of mass now (m).
+    pub(super) fn next_velocities(
+        &self,
+        o: usize,
+        body: &DynamicBody,
+        h: f32,
+    ) -> (Vector, Vector, Vector) {
+        let (now, done) = (self.impulses[o], self.applied[o]);
+        let dj = now.linear - done.linear;
+        let dtau = (now.angular_about_origin - done.angular_about_origin) - self.com[o].cross(dj);
+        (
+            self.com_velocity[o] + dj * body.inverse_mass + body.acceleration * h,
+            self.angvel[o] + body.inverse_inertia * dtau,
+            self.com[o],
+        )
     }
 
     /// Records momentum `j` (N·s) handed to obstacle `o` at `point`.
