@@ -92,6 +92,7 @@ fn hand_written_scene_files_run_from_the_command() {
         ("banner.ron", 150),
         ("round_table.ron", 120),
         ("mesh_table.ron", 120),
+        ("laid_table.ron", 120),
     ] {
         let stdout = cloth3d_ok(&["run", &example(name), "--json"]);
         let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
