@@ -446,6 +446,7 @@ mod tests {
             mass: &mass,
             inv_mass: &inv_mass,
             friction,
+            skip_still: false,
             far: 0.12,
         };
         let (mut nearest, mut normal, mut distance, mut surface) =

@@ -81,6 +81,9 @@ pub(super) struct ParticlePass<'a> {
     pub mass: &'a [f32],
     pub inv_mass: &'a [f32],
     pub friction: FrictionPolicy,
+    /// Pass over the still obstacles but for a particle a moving or
+    /// dynamic body touched ([`super::stage::ResolveOptions::skip_still`]).
+    pub skip_still: bool,
     /// Beyond this distance (m) an obstacle is neither touched nor near.
     pub far: f32,
 }
@@ -141,45 +144,56 @@ impl ParticlePass<'_> {
         let mut nearest_distance = f32::INFINITY;
         // The last immovable obstacle and the last dynamic body touched.
         let (mut immovable, mut dynamic) = (None, None);
-        for c in 0..scratch.candidates.len() {
-            let o = scratch.candidates[c] as usize;
-            // Beyond the reach of the contact and the edge pass: as if
-            // it were not a candidate (the edge pass then takes the
-            // particle's distance to be the reach, less than it is).
-            if self.tracks.surely_beyond(o, out.x[k], self.far) {
-                continue;
+        // Round 0 over the candidates the pass answers for; where it
+        // passes over the still ones, round 1 over those, for a particle a
+        // moving or dynamic body touched.
+        for round in 0..2 {
+            if round == 1 && !(self.skip_still && dynamic.is_some()) {
+                break;
             }
-            let Some(hit) = self.contact(o, self.x_prev[i], out.x[k]) else {
-                continue;
-            };
-            if hit.signed_distance < nearest_distance {
-                nearest_distance = hit.signed_distance;
-                out.nearest[k] = o as u32;
-                out.normal[k] = hit.normal;
-                out.surface[k] = hit.normal.dot(hit.point);
-                // Resolution below leaves a particle at least the thickness out.
-                out.distance[k] = if self.inv_mass[i] != 0.0 {
-                    hit.signed_distance.max(thickness)
-                } else {
-                    hit.signed_distance
-                };
-            }
-            // A hair of slack keeps particles a solver left exactly at the
-            // thickness in contact, so friction still acts on them.
-            if self.inv_mass[i] != 0.0 && hit.signed_distance < thickness + CONTACT_SLACK {
-                let (contact, (point, j)) =
-                    self.resolve(i, (&mut out.x[k], &mut out.v[k]), (o, hit));
-                out.contacts.touch(k, &contact);
-                if contact.immovable {
-                    immovable = Some((o, contact.normal, contact.surface_velocity));
-                } else {
-                    dynamic = Some((o, contact.normal));
+            for c in 0..scratch.candidates.len() {
+                let o = scratch.candidates[c] as usize;
+                if self.skip_still && (round == 0) == self.obstacles[o].is_still() {
+                    continue;
                 }
-                let sum = &mut scratch.impulses[o];
-                sum.linear += j;
-                sum.angular_about_origin += point.cross(j);
-                sum.contacts += 1;
-                contacts += 1;
+                // Beyond the reach of the contact and the edge pass: as if
+                // it were not a candidate (the edge pass then takes the
+                // particle's distance to be the reach, less than it is).
+                if self.tracks.surely_beyond(o, out.x[k], self.far) {
+                    continue;
+                }
+                let Some(hit) = self.contact(o, self.x_prev[i], out.x[k]) else {
+                    continue;
+                };
+                if hit.signed_distance < nearest_distance {
+                    nearest_distance = hit.signed_distance;
+                    out.nearest[k] = o as u32;
+                    out.normal[k] = hit.normal;
+                    out.surface[k] = hit.normal.dot(hit.point);
+                    // Resolution below leaves a particle at least the thickness out.
+                    out.distance[k] = if self.inv_mass[i] != 0.0 {
+                        hit.signed_distance.max(thickness)
+                    } else {
+                        hit.signed_distance
+                    };
+                }
+                // A hair of slack keeps particles a solver left exactly at the
+                // thickness in contact, so friction still acts on them.
+                if self.inv_mass[i] != 0.0 && hit.signed_distance < thickness + CONTACT_SLACK {
+                    let (contact, (point, j)) =
+                        self.resolve(i, (&mut out.x[k], &mut out.v[k]), (o, hit));
+                    out.contacts.touch(k, &contact);
+                    if contact.immovable {
+                        immovable = Some((o, contact.normal, contact.surface_velocity));
+                    } else {
+                        dynamic = Some((o, contact.normal));
+                    }
+                    let sum = &mut scratch.impulses[o];
+                    sum.linear += j;
+                    sum.angular_about_origin += point.cross(j);
+                    sum.contacts += 1;
+                    contacts += 1;
+                }
             }
         }
         if let (Some(s), Some(d)) = (immovable, dynamic) {

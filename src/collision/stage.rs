@@ -98,6 +98,10 @@ impl EdgeLook<'_> {
 pub(crate) struct ResolveOptions<'a> {
     /// Whether Coulomb friction acts here or was decided in the solve.
     pub friction: FrictionPolicy,
+    /// The integrator held the still obstacles' contacts: pass over them,
+    /// but for a particle a moving or dynamic body touched (it may have
+    /// pushed it into one, or pressed it against one: `backing.rs`).
+    pub skip_still: bool,
     /// Keep stretch and shear springs out of the obstacles too.
     pub edges: bool,
     /// The material's stretch limit (times the rest length; infinite for
@@ -406,6 +410,7 @@ impl CollisionStage {
             mass,
             inv_mass,
             friction: options.friction,
+            skip_still: options.skip_still,
             far: self.tracks.reach.max(thickness + CONTACT_SLACK),
         };
         let (x, v) = (Disjoint::new(&mut x[..]), Disjoint::new(&mut v[..]));

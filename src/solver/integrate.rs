@@ -26,6 +26,10 @@ pub(crate) struct SubstepOutcome {
     /// (xpbd's lanes, `lane_contacts.rs`): the collision stage may wait
     /// for the step's last substep.
     pub contacts_held: bool,
+    /// The integrator held the still obstacles' contacts inside the
+    /// substep, among moving or dynamic bodies: the collision stage may
+    /// pass over them but at the step's last substep.
+    pub still_held: bool,
     /// At the step's last substep, when the integrator held the contacts:
     /// the particles it held in contact with an obstacle (0 otherwise).
     pub touching: u32,
@@ -50,6 +54,7 @@ pub(crate) fn integrate(
         friction: FrictionPolicy::Apply,
         stretch_room: None,
         contacts_held: false,
+        still_held: false,
         touching: 0,
     };
     let solved = |iterations| SubstepOutcome {
@@ -57,6 +62,7 @@ pub(crate) fn integrate(
         friction: FrictionPolicy::AlreadySolved,
         stretch_room: None,
         contacts_held: false,
+        still_held: false,
         touching: 0,
     };
     Ok(match sub.settings.integrator {
@@ -92,6 +98,7 @@ pub(crate) fn integrate(
             SubstepOutcome {
                 stretch_room: outcome.stretch_room,
                 contacts_held: outcome.contacts_held,
+                still_held: outcome.still_held,
                 touching: outcome.touching,
                 friction,
                 ..explicit(0)

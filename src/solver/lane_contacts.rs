@@ -146,6 +146,18 @@ pub(crate) struct LaneContacts {
     meshes: MeshLists,
 }
 
+/// Which obstacles the lanes hold in a substep ([`LaneContacts::begin`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Holding {
+    /// None: the collision stage answers for every contact after the substep.
+    None,
+    /// Every obstacle: the collision stage may wait for the step's last substep.
+    All,
+    /// The still ones; the collision stage answers for the moving and
+    /// dynamic bodies after each substep, and for all at the last.
+    Still,
+}
+
 /// The pieces of an obstacle's `shape` the lanes take one by one, each
 /// with its pose in the obstacle's frame and its index among a compound's
 /// parts: a compound's parts (parry's compounds do not nest), or the
@@ -189,11 +201,19 @@ impl LaneContacts {
     /// its size; a compound when each of its parts is. The collision
     /// stage then need not run after a substep but the last.
     pub fn holds(obstacles: &[Obstacle], motion: f32) -> bool {
+        Self::holds_each(obstacles.iter(), motion)
+    }
+
+    /// [`Self::holds`] over `obstacles` as an iterator.
+    fn holds_each<'a>(obstacles: impl Iterator<Item = &'a Obstacle> + Clone, motion: f32) -> bool {
         let deep = BALL_MOTIONS * motion;
-        !obstacles.is_empty()
-            && Self::may_hold(obstacles)
+        obstacles.clone().next().is_some()
+            && obstacles.clone().all(|o| {
+                o.is_still()
+                    && pieces(&*o.shape)
+                        .all(|(_, _, shape)| shape.is_convex() || is_held_mesh(shape))
+            })
             && obstacles
-                .iter()
                 .flat_map(|o| pieces(&*o.shape))
                 .all(|(_, _, shape)| {
                     match (shape.as_ball(), shape.as_capsule(), shape.as_cuboid()) {
@@ -211,24 +231,61 @@ impl LaneContacts {
                 })
     }
 
-    /// Takes `obstacles` for a substep of `n` lanes in which no particle
-    /// moves further than `motion` (m), their surfaces moved out by
-    /// `thickness` (m); clears every lane's record. Returns whether it
-    /// holds them ([`Self::holds`]); if not, it holds none.
+    /// Whether the lanes may hold the still ones among `obstacles` while
+    /// the collision stage answers for the others, moving or dynamic
+    /// ([`Holding::Still`]): there are both, and every still one is a
+    /// shape [`Self::may_hold`] takes.
+    pub fn may_hold_still(obstacles: &[Obstacle]) -> bool {
+        let still = obstacles.iter().filter(|o| o.is_still());
+        still.clone().next().is_some()
+            && obstacles.iter().any(|o| !o.is_still())
+            && still.into_iter().all(|o| {
+                pieces(&*o.shape).all(|(_, _, shape)| shape.is_convex() || is_held_mesh(shape))
+            })
+    }
+
+    /// [`Self::begin_holding`] of every obstacle or none: whether it holds
+    /// them all.
+    #[cfg(test)]
     pub fn begin(
         &mut self,
         obstacles: &[Obstacle],
         (thickness, motion): (f32, f32),
         n: usize,
     ) -> bool {
+        self.begin_holding(obstacles, (thickness, motion, false), n) == Holding::All
+    }
+
+    /// Takes `obstacles` for a substep of `n` lanes in which no particle
+    /// moves further than `motion` (m), their surfaces moved out by
+    /// `thickness` (m); clears every lane's record. Returns which it
+    /// holds: all ([`Self::holds`]), or the still ones among moving or
+    /// dynamic bodies, when `still` and [`Self::holds`] would hold those;
+    /// else none.
+    pub fn begin_holding(
+        &mut self,
+        obstacles: &[Obstacle],
+        (thickness, motion, still): (f32, f32, bool),
+        n: usize,
+    ) -> Holding {
         self.shapes.clear();
         self.friction.clear();
         self.hulls.clear();
         self.meshes.begin();
-        if !Self::holds(obstacles, motion) {
-            return false;
-        }
+        let holding = if Self::holds(obstacles, motion) {
+            Holding::All
+        } else if still
+            && obstacles.iter().any(|o| !o.is_still())
+            && Self::holds_each(obstacles.iter().filter(|o| o.is_still()), motion)
+        {
+            Holding::Still
+        } else {
+            return Holding::None;
+        };
         for (index, o) in obstacles.iter().enumerate() {
+            if !o.is_still() {
+                continue;
+            }
             for (part, placed, shape) in pieces(&*o.shape) {
                 let pose = o.pose * placed;
                 let still = self.still_shape((shape, &pose), (index, part), (thickness, motion), n);
@@ -249,7 +306,7 @@ impl LaneContacts {
         for record in &mut self.planes {
             record.resize(slots * n, f32::NEG_INFINITY);
         }
-        true
+        holding
     }
 
     /// The still `shape` at `pose` (piece `part` of a compound, or the

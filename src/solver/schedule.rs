@@ -44,7 +44,7 @@ use super::substeps::{self_collision_substeps, MAX_SELF_SUBSTEP};
 use super::xpbd;
 use crate::cloth::{Cloth, LaneGrid, Particles, SpringKind};
 use crate::collision::{
-    any_stretch_over_limit, LookBasis, Obstacle, ResolveOptions, SelfContactParams,
+    any_stretch_over_limit, FrictionPolicy, LookBasis, Obstacle, ResolveOptions, SelfContactParams,
 };
 use crate::context::StepContext;
 use crate::error::{positive, ClothError};
@@ -429,7 +429,8 @@ impl ClothSolver {
             // Self-collision moved particles the lanes had put out of the
             // obstacles: they are put out again at once (the stage runs
             // at the last substep).
-            if outcome.contacts_held && self_touching > 0 && substep + 1 < k {
+            let lanes_held = outcome.contacts_held || outcome.still_held;
+            if lanes_held && self_touching > 0 && substep + 1 < k {
                 let p = &mut cloth.particles;
                 xpbd::hold_contacts_again(&mut ws.xpbd, (&mut p.x, &mut p.v), team);
             }
@@ -481,13 +482,25 @@ impl ClothSolver {
             ws.collision
                 .cache_deferred(&ws.backup_x, &cloth.topology.springs);
             // Resolve contacts, by the friction policy the integrator handed back.
+            // Where the lanes held the still obstacles among moving or
+            // dynamic bodies, the stage answers for the bodies alone before
+            // the last substep, and for all at it, where the lanes' friction
+            // is not applied again (as where they held every contact).
+            let last = substep + 1 == k;
+            let skip_still = outcome.still_held && !last;
+            let friction = if outcome.still_held && last {
+                FrictionPolicy::AlreadySolved
+            } else {
+                outcome.friction
+            };
             let touched = ws.collision.resolve(
                 &ctx,
                 &mut cloth.particles,
                 &cloth.topology.springs,
                 obstacles,
                 ResolveOptions {
-                    friction: outcome.friction,
+                    friction,
+                    skip_still,
                     edges,
                     stretch_limit: cloth.material.stretch_limit_factor(),
                     stretch_room: room,

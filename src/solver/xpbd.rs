@@ -48,7 +48,7 @@ use super::grid_chains::ChainScratch;
 use super::grid_sweep::{
     limit_stretch, sweep, Compliance, GridPlan, KindInSweep, LanePlanes, Lanes,
 };
-use super::lane_contacts::LaneContacts;
+use super::lane_contacts::{Holding, LaneContacts};
 use super::lane_motion::{self, Motion};
 use super::pin_support::PinSupport;
 use super::settings::SolverSettings;
@@ -115,6 +115,10 @@ pub(crate) struct XpbdOutcome {
     /// ([`LaneContacts::holds`]): the collision stage may wait for the
     /// step's last substep.
     pub contacts_held: bool,
+    /// The substep held the contacts of the still obstacles among moving or
+    /// dynamic bodies ([`Holding::Still`]): the collision stage answers
+    /// for those bodies after it, and for all at the step's last substep.
+    pub still_held: bool,
     /// At the step's last substep, when the lanes held the contacts: the
     /// particles they pushed out of an obstacle in it (0 otherwise).
     pub touching: u32,
@@ -161,7 +165,7 @@ pub(crate) fn step(
     // Where the substep starts, before the prediction moves `x`. Not
     // where the lanes may hold every contact (a cuboid among them): they
     // hold it instead, or the collision stage does after the substep.
-    if LaneContacts::may_hold(sub.obstacles) {
+    if LaneContacts::may_hold(sub.obstacles) || LaneContacts::may_hold_still(sub.obstacles) {
         ws.planes.clear();
     } else {
         collision.contact_planes(
@@ -284,7 +288,9 @@ pub(crate) fn step(
             }
             let motion = f32::from_bits(fastest.into_inner()).sqrt() * h;
             let contacts = &mut ws.lane_contacts;
-            let held = contacts.begin(sub.obstacles, (sub.ctx.thickness, motion), n);
+            let holding =
+                contacts.begin_holding(sub.obstacles, (sub.ctx.thickness, motion, true), n);
+            let held = holding != Holding::None;
             if held {
                 contacts.take_planes(sub.obstacles, l, team);
             }
@@ -357,7 +363,9 @@ pub(crate) fn step(
             // Velocities from the motion: the predicted velocity plus the
             // sweeps' correction over `h`, the prediction being the start
             // plus `h` times it (as `predict` made it, to the bit).
-            let stay = held && may_stay;
+            // Not while the collision stage answers for moving or dynamic
+            // bodies after each substep: it works on the particles' arrays.
+            let stay = holding == Holding::All && may_stay;
             let lanes = l.disjoint();
             let [vx, vy, vz] = vel.each_mut().map(|c| Disjoint::new(&mut c[..]));
             if stay {
@@ -419,8 +427,13 @@ pub(crate) fn step(
             }
             XpbdOutcome {
                 stretch_room: room,
-                contacts_held: held,
-                touching: if held && last { contacts.touching() } else { 0 },
+                contacts_held: holding == Holding::All,
+                still_held: holding == Holding::Still,
+                touching: if holding == Holding::All && last {
+                    contacts.touching()
+                } else {
+                    0
+                },
             }
         }
         _ => {
@@ -455,6 +468,7 @@ pub(crate) fn step(
             XpbdOutcome {
                 stretch_room: None,
                 contacts_held: false,
+                still_held: false,
                 touching: 0,
             }
         }
