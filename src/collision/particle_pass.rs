@@ -142,13 +142,15 @@ impl ParticlePass<'_> {
             .tracks
             .gather_particle(i, out.x[k], &mut scratch.candidates);
         let mut nearest_distance = f32::INFINITY;
-        // The last immovable obstacle and the last dynamic body touched.
+        // The last immovable obstacle and the last dynamic body touched,
+        // and whether a moving or dynamic body did.
         let (mut immovable, mut dynamic) = (None, None);
+        let mut body_touched = false;
         // Round 0 over the candidates the pass answers for; where it
         // passes over the still ones, round 1 over those, for a particle a
         // moving or dynamic body touched.
         for round in 0..2 {
-            if round == 1 && !(self.skip_still && dynamic.is_some()) {
+            if round == 1 && !(self.skip_still && body_touched) {
                 break;
             }
             for c in 0..scratch.candidates.len() {
@@ -183,6 +185,7 @@ impl ParticlePass<'_> {
                     let (contact, (point, j)) =
                         self.resolve(i, (&mut out.x[k], &mut out.v[k]), (o, hit));
                     out.contacts.touch(k, &contact);
+                    body_touched |= !self.obstacles[o].is_still();
                     if contact.immovable {
                         immovable = Some((o, contact.normal, contact.surface_velocity));
                     } else {

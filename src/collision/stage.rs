@@ -158,7 +158,7 @@ pub struct CollisionStage {
     /// Per block of the particle pass: its scratch.
     blocks: Vec<BlockScratch>,
     /// The particles a dynamic body presses against an immovable
-    /// obstacle, by body (scratch of [`Self::resolve`]).
+    /// obstacle, in block and particle order (scratch of [`Self::resolve`]).
     backed: Vec<Backed>,
     /// The impulses (N·s) of the backed particles' support (scratch).
     support: Vec<f32>,
@@ -457,8 +457,8 @@ impl CollisionStage {
             }
         }
         // Bodies pressing particles against immovable obstacles are held
-        // up by them (in block and particle order: the same
-        // bits on any number of threads).
+        // up by them (in block and particle order: the same bits on any
+        // number of threads).
         self.backed.clear();
         for block in &self.blocks[..blocks] {
             self.backed.extend_from_slice(&block.backed);
