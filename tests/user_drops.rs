@@ -207,18 +207,7 @@ fn a_ball_dropped_on_a_laid_table_rests_on_the_cloth() {
     );
     let mut sim = cotton_sheet(40, 1.2, Vector::new(0.0, 0.95, 0.0));
     let inside = inside_square_top(0.45, 0.02, 0.75);
-    let (mut worst, mut deepest) = (0.0f32, 0.0f32);
-    for _ in 0..150 {
-        run(&mut sim, &mut world, 1);
-        worst = worst.max(sim.max_strain(SpringKind::Stretch));
-        deepest = sim
-            .positions()
-            .iter()
-            .map(|&p| inside(p))
-            .fold(deepest, f32::max);
-    }
-    assert!(worst < 0.05, "stretched {worst}");
-    assert!(deepest <= 0.001, "{deepest} m inside the top");
+    lands_on_the_top(&mut sim, &mut world, inside);
     // At rest on the cloth, over the table: its bottom the cloth's two
     // layers of thickness (1 cm each) above the top, within a few mm.
     let body = &world.bodies[ball];
@@ -554,6 +543,28 @@ fn inside_square_top(half: f32, thick: f32, top: f32) -> impl Fn(Vector) -> f32 
     }
 }
 
+/// Steps `sim` and `world` 150 frames: the cloth stretches under 5% in
+/// every frame, and no particle goes more than 1 mm into the table's top
+/// (`inside`: how far a point is inside it, m).
+fn lands_on_the_top(
+    sim: &mut Simulation,
+    world: &mut PhysicsWorld,
+    inside: impl Fn(Vector) -> f32,
+) {
+    let (mut worst, mut deepest) = (0.0f32, 0.0f32);
+    for _ in 0..150 {
+        run(sim, world, 1);
+        worst = worst.max(sim.max_strain(SpringKind::Stretch));
+        deepest = sim
+            .positions()
+            .iter()
+            .map(|&p| inside(p))
+            .fold(deepest, f32::max);
+    }
+    assert!(worst < 0.05, "stretched {worst}");
+    assert!(deepest <= 0.001, "{deepest} m inside the top");
+}
+
 /// Drops a 40 × 40 cotton tablecloth `size` (m) wide, with the crate's
 /// defaults, 0.2 m over a table whose top is at `top` (m) in `world`, for
 /// 150 frames: it stretches under 5% in every frame, no particle goes more
@@ -567,18 +578,7 @@ fn drapes_over_the_table(
 ) {
     let mut sim = cotton_sheet(40, size, Vector::new(0.0, top + 0.2, 0.0));
     assert_eq!(sim.solver.settings.integrator, Integrator::Xpbd);
-    let (mut worst, mut deepest) = (0.0f32, 0.0f32);
-    for _ in 0..150 {
-        run(&mut sim, world, 1);
-        worst = worst.max(sim.max_strain(SpringKind::Stretch));
-        deepest = sim
-            .positions()
-            .iter()
-            .map(|&p| inside(p))
-            .fold(deepest, f32::max);
-    }
-    assert!(worst < 0.05, "stretched {worst}");
-    assert!(deepest <= 0.001, "{deepest} m inside the top");
+    lands_on_the_top(&mut sim, world, inside);
     let middle = sim.positions()[sim.index(20, 20).unwrap()];
     assert!((middle.y - top).abs() < 0.02, "middle at {middle}");
     for (c, r) in [(0, 0), (39, 0), (0, 39), (39, 39)] {
