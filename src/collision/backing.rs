@@ -1,5 +1,5 @@
-//! Bodies held up by the cloth they press against immovable obstacles: a
-//! ball resting on a tablecloth on a table. The particle pass pushes each
+//! Bodies held up by the cloth they press against other obstacles: a
+//! ball resting on a tablecloth on a table, or on a cloth over a crate. The particle pass pushes each
 //! particle out of every obstacle in turn, and hands the body the momentum
 //! the particle lost; a particle between a ball and a table cannot make
 //! room, and the little momentum it has cannot hold a body a thousand
@@ -10,13 +10,18 @@
 //! frame.
 //!
 //! So the pass records each particle a dynamic body presses against an
-//! immovable obstacle ([`Backed`]: their contact normals more than 120°
-//! apart), and the body then meets those particles as it would meet the
+//! immovable obstacle ([`Backed`]), and the body then meets those particles as it would meet the
 //! obstacle itself: sequential impulses over them, along the immovable
 //! obstacle's normal (the only way it can push back), stop the body
 //! coming closer and lift it by a share of the layers' overlap
-//! ([`SUPPORT_LIFT`]). Dynamic bodies pressing each other through the
-//! cloth are left as they were.
+//! ([`SUPPORT_LIFT`]). A particle pressed between two dynamic bodies
+//! (and no immovable obstacle) pushes the two apart the same way, as two
+//! bodies in contact: a 1 kg ball on a 32² cotton sheet over a 20 kg
+//! crate sank 12 mm into the cloth's two 1 cm layers and left it 12.5%
+//! stretched; now 7 mm and 5.7% (the crate, pushed down inside the
+//! cloth's step, is held up by its floor only in rapier's step after it).
+//! A particle is taken to be pressed when the contacts it was pushed out
+//! of last face each other (normals more than 120° apart).
 
 use super::obstacle::Obstacle;
 use super::tracks::ObstacleTracks;
@@ -28,6 +33,9 @@ use crate::math::Vector;
 pub(super) struct Backed {
     /// The dynamic body (index into the step's obstacles).
     pub obstacle: u32,
+    /// The obstacle behind the particle: immovable, or another dynamic
+    /// body (index into the step's obstacles).
+    pub backer: u32,
     /// The particle's position (m), where the body is pushed.
     pub point: Vector,
     /// The direction (unit) the body presses the particle in: into the
@@ -38,7 +46,7 @@ pub(super) struct Backed {
     pub normal: Vector,
     /// How far (m) the two thickness layers overlap.
     pub depth: f32,
-    /// The velocity (m/s) of the immovable obstacle's surface there, which
+    /// The velocity (m/s) of an immovable backer's surface there, which
     /// the particle cannot leave along the normal.
     pub velocity: Vector,
 }
@@ -54,54 +62,84 @@ const SUPPORT_ROUNDS: usize = 8;
 /// nearly the height it fell from.)
 const SUPPORT_LIFT: f32 = 0.2;
 
-/// Holds up each dynamic body by the particles it presses against
-/// immovable obstacles (`backed`, in block and particle order: the same
-/// bits on any number of threads), from the velocities it will have over
-/// the next substep of `h` seconds, lifting it by [`SUPPORT_LIFT`] of the
-/// overlap per step of `dt` seconds. The momentum goes to the body (and to
-/// rapier) as any particle's push does; the obstacle behind the particle
-/// gives it. `support` is scratch.
+/// A body's state through [`support_backed`]: its velocity (m/s), angular
+/// velocity (rad/s) and centre of mass (m).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Moving {
+    v: Vector,
+    w: Vector,
+    com: Vector,
+}
+
+/// Holds up each dynamic body by the particles it presses against another
+/// obstacle (`backed`, in block and particle order: the same bits on any
+/// number of threads): against an immovable one, as that obstacle would;
+/// against another dynamic body, the two pushed apart as two bodies in
+/// contact. Sequential impulses from the velocities each body will have
+/// over the next substep of `h` seconds, lifting by [`SUPPORT_LIFT`] of
+/// the overlap per step of `dt` seconds. The momentum goes to the bodies
+/// (and to rapier) as any particle's push does; an immovable obstacle
+/// behind the particle gives it. `support` and `moving` are scratch.
 pub(super) fn support_backed(
     tracks: &mut ObstacleTracks,
     obstacles: &[Obstacle],
     backed: &[Backed],
     (h, dt): (f32, f32),
-    support: &mut Vec<f32>,
+    (support, moving): (&mut Vec<f32>, &mut Vec<Moving>),
 ) {
-    for (o, obstacle) in obstacles.iter().enumerate() {
-        let Some(body) = &obstacle.body else {
-            continue;
-        };
-        let pressing = |b: &&Backed| b.obstacle as usize == o;
-        if !backed.iter().any(|b| pressing(&b)) {
-            continue;
-        }
-        let (mut v, mut w, com) = tracks.next_velocities(o, body, h);
-        support.clear();
-        support.resize(backed.len(), 0.0);
-        for _ in 0..SUPPORT_ROUNDS {
-            let each = backed.iter().zip(support.iter_mut());
-            for (c, lambda) in each.filter(|(b, _)| pressing(b)) {
-                let (r, n) = (c.point - com, c.normal);
-                let rn = r.cross(n);
-                let k = n.dot(body.inverse_mass * n) + rn.dot(body.inverse_inertia * rn);
-                if !(k > 0.0 && k.is_finite()) {
-                    continue;
-                }
-                // How fast the body comes closer along n, and how fast it
-                // should leave.
-                let closing = (v + w.cross(r) - c.velocity).dot(n);
-                let lift = SUPPORT_LIFT * c.depth / dt;
-                let total = (*lambda + (closing + lift) / k).max(0.0);
-                let change = total - *lambda;
-                *lambda = total;
-                v -= body.inverse_mass * n * change;
-                w -= body.inverse_inertia * (rn * change);
+    moving.clear();
+    moving.extend(obstacles.iter().enumerate().map(|(o, obstacle)| {
+        obstacle.body.as_ref().map_or(Moving::default(), |body| {
+            let (v, w, com) = tracks.next_velocities(o, body, h);
+            Moving { v, w, com }
+        })
+    }));
+    let body = |o: u32| obstacles.get(o as usize).and_then(|b| b.body.as_ref());
+    support.clear();
+    support.resize(backed.len(), 0.0);
+    for _ in 0..SUPPORT_ROUNDS {
+        for (c, lambda) in backed.iter().zip(support.iter_mut()) {
+            let Some(pressing) = body(c.obstacle) else {
+                continue;
+            };
+            let n = c.normal;
+            let a = moving[c.obstacle as usize];
+            let ra = c.point - a.com;
+            let rna = ra.cross(n);
+            let mut k = n.dot(pressing.inverse_mass * n) + rna.dot(pressing.inverse_inertia * rna);
+            // The backer's surface velocity, and its share of the mass.
+            let (backer, mut surface, mut rnb) = (body(c.backer), c.velocity, Vector::ZERO);
+            if let Some(backer) = backer {
+                let b = moving[c.backer as usize];
+                let rb = c.point - b.com;
+                (surface, rnb) = (b.v + b.w.cross(rb), rb.cross(n));
+                k += n.dot(backer.inverse_mass * n) + rnb.dot(backer.inverse_inertia * rnb);
+            }
+            if !(k > 0.0 && k.is_finite()) {
+                continue;
+            }
+            // How fast the body comes closer to the backer along n, and
+            // how fast it should leave.
+            let closing = (a.v + a.w.cross(ra) - surface).dot(n);
+            let lift = SUPPORT_LIFT * c.depth / dt;
+            let total = (*lambda + (closing + lift) / k).max(0.0);
+            let change = total - *lambda;
+            *lambda = total;
+            let a = &mut moving[c.obstacle as usize];
+            a.v -= pressing.inverse_mass * n * change;
+            a.w -= pressing.inverse_inertia * (rna * change);
+            if let Some(backer) = backer {
+                let b = &mut moving[c.backer as usize];
+                b.v += backer.inverse_mass * n * change;
+                b.w += backer.inverse_inertia * (rnb * change);
             }
         }
-        for (k, c) in backed.iter().enumerate().filter(|(_, b)| pressing(b)) {
-            if support[k] > 0.0 {
-                tracks.add_impulse(o, c.point, -c.normal * support[k]);
+    }
+    for (c, &lambda) in backed.iter().zip(support.iter()) {
+        if lambda > 0.0 {
+            tracks.add_impulse(c.obstacle as usize, c.point, -c.normal * lambda);
+            if body(c.backer).is_some() {
+                tracks.add_impulse(c.backer as usize, c.point, c.normal * lambda);
             }
         }
     }

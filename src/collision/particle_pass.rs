@@ -142,9 +142,9 @@ impl ParticlePass<'_> {
             .tracks
             .gather_particle(i, out.x[k], &mut scratch.candidates);
         let mut nearest_distance = f32::INFINITY;
-        // The last immovable obstacle and the last dynamic body touched,
-        // and whether a moving or dynamic body did.
-        let (mut immovable, mut dynamic) = (None, None);
+        // The last immovable obstacle and the last two dynamic bodies
+        // touched, and whether a moving or dynamic body did.
+        let (mut immovable, mut dynamic, mut dynamic_before) = (None, None, None);
         let mut body_touched = false;
         // Round 0 over the candidates the pass answers for; where it
         // passes over the still ones, round 1 over those, for a particle a
@@ -189,6 +189,9 @@ impl ParticlePass<'_> {
                     if contact.immovable {
                         immovable = Some((o, contact.normal, contact.surface_velocity));
                     } else {
+                        if dynamic.is_some_and(|(d, _)| d != o) {
+                            dynamic_before = dynamic;
+                        }
                         dynamic = Some((o, contact.normal));
                     }
                     let sum = &mut scratch.impulses[o];
@@ -199,10 +202,17 @@ impl ParticlePass<'_> {
                 }
             }
         }
-        if let (Some(s), Some(d)) = (immovable, dynamic) {
-            if s.1.dot(d.1) < -OPPOSED {
+        // Pressed against an immovable obstacle, or else between two
+        // dynamic bodies (the first of them presses).
+        match (immovable, dynamic, dynamic_before) {
+            (Some(s), Some(d), _) if s.1.dot(d.1) < -OPPOSED => {
                 self.back(k, (s.0, d.0, s.2), out, scratch);
             }
+            (_, Some(d), Some(e)) if e.1.dot(d.1) < -OPPOSED => {
+                let (a, b) = (d.0.min(e.0), d.0.max(e.0));
+                self.back(k, (b, a, Vector::ZERO), out, scratch);
+            }
+            _ => {}
         }
         if !cached && out.nearest[k] != NONE {
             scratch.strays += 1;
@@ -216,9 +226,10 @@ impl ParticlePass<'_> {
     }
 
     /// Records the block's `k`th particle as pressed by dynamic body `d`
-    /// against immovable obstacle `s` when their thickness layers overlap
-    /// where it ended ([`Backed`]): by how much, whichever of the two
-    /// pushed it last; the immovable surface moves at `held` (m/s) there.
+    /// against obstacle `s` (immovable, or another dynamic body) when
+    /// their thickness layers overlap where it ended ([`Backed`]): by how
+    /// much, whichever of the two pushed it last; an immovable surface
+    /// moves at `held` (m/s) there.
     fn back(
         &self,
         k: usize,
@@ -237,6 +248,7 @@ impl ParticlePass<'_> {
         if depth > 0.0 && depth.is_finite() {
             scratch.backed.push(Backed {
                 obstacle: d as u32,
+                backer: s as u32,
                 point: x,
                 normal: -on_s.normal,
                 depth,

@@ -5,7 +5,7 @@
 
 use parry3d::bounding_volume::Aabb;
 
-use super::backing::{support_backed, Backed};
+use super::backing::{support_backed, Backed, Moving};
 use super::contact_set::{ContactSet, ParticleContact, NONE};
 use super::obstacle::{Obstacle, ObstacleImpulse};
 use super::particle_pass::{BlockOut, BlockScratch, ParticlePass, BLOCK, CONTACT_SLACK};
@@ -160,8 +160,10 @@ pub struct CollisionStage {
     /// The particles a dynamic body presses against an immovable
     /// obstacle, in block and particle order (scratch of [`Self::resolve`]).
     backed: Vec<Backed>,
-    /// The impulses (N·s) of the backed particles' support (scratch).
+    /// The impulses (N·s) of the backed particles' support, and the
+    /// bodies' motion through it (scratch).
     support: Vec<f32>,
+    moving: Vec<Moving>,
     /// Per block of [`EDGE_BLOCK`] springs: those the edge pass must look at.
     edge_blocks: Vec<EdgeList>,
     /// The stretch and shear springs that may come near an obstacle this
@@ -465,8 +467,8 @@ impl CollisionStage {
         }
         if !self.backed.is_empty() {
             let (h, dt) = (ctx.h, ctx.dt);
-            let (tracks, support) = (&mut self.tracks, &mut self.support);
-            support_backed(tracks, obstacles, &self.backed, (h, dt), support);
+            let (tracks, scratch) = (&mut self.tracks, (&mut self.support, &mut self.moving));
+            support_backed(tracks, obstacles, &self.backed, (h, dt), scratch);
         }
         // A stray particle may meet an obstacle along any spring.
         let watched = strays == 0 && !self.tracks.cache_is_empty();
