@@ -27,8 +27,9 @@ use super::obstacle::Obstacle;
 use super::tracks::ObstacleTracks;
 use crate::math::Vector;
 
-/// A particle caught between a dynamic body and an immovable obstacle:
-/// their thickness layers overlap where it is.
+/// A particle caught between a dynamic body and another obstacle (its
+/// backer: immovable, or another dynamic body): their thickness layers
+/// overlap where it is.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Backed {
     /// The dynamic body (index into the step's obstacles).
@@ -39,8 +40,8 @@ pub(super) struct Backed {
     /// The particle's position (m), where the body is pushed.
     pub point: Vector,
     /// The direction (unit) the body presses the particle in: into the
-    /// immovable obstacle, against its normal, which is the only way it
-    /// can push back (along the body's own normal, a ball landing off
+    /// backer, against its normal, which is the only way it can push
+    /// back (along the body's own normal, a ball landing off
     /// centre on its first few backed particles was kicked sideways at
     /// 0.35 m/s and rolled off the table).
     pub normal: Vector,
@@ -51,7 +52,7 @@ pub(super) struct Backed {
     pub velocity: Vector,
 }
 
-/// Gauss–Seidel rounds over a body's backed particles.
+/// Gauss–Seidel rounds over the backed particles.
 const SUPPORT_ROUNDS: usize = 8;
 
 /// The share of the layers' overlap a body pressing backed particles is
