@@ -146,7 +146,14 @@ pub(crate) struct LaneContacts {
     meshes: MeshLists,
 }
 
-/// Which obstacles the lanes hold in a substep ([`LaneContacts::begin`]).
+/// Whether the lanes may hold obstacle `o`'s shape, still: convex (parry
+/// knows balls, capsules, half-spaces and cuboids convex too), a mesh
+/// without an inside or a heightfield, or a compound of such parts.
+fn held_shape(o: &Obstacle) -> bool {
+    pieces(&*o.shape).all(|(_, _, shape)| shape.is_convex() || is_held_mesh(shape))
+}
+
+/// Which obstacles the lanes hold in a substep ([`LaneContacts::begin_holding`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Holding {
     /// None: the collision stage answers for every contact after the substep.
@@ -183,11 +190,7 @@ impl LaneContacts {
     /// or a compound of such parts (a table built of a top and legs, a
     /// convex decomposition); not an oriented mesh.
     pub fn may_hold(obstacles: &[Obstacle]) -> bool {
-        obstacles.iter().all(|o| {
-            // parry knows balls, capsules, half-spaces and cuboids convex too.
-            o.is_still()
-                && pieces(&*o.shape).all(|(_, _, shape)| shape.is_convex() || is_held_mesh(shape))
-        })
+        obstacles.iter().all(|o| o.is_still() && held_shape(o))
     }
 
     /// Whether the lanes hold the contacts of every one of `obstacles`
@@ -208,11 +211,7 @@ impl LaneContacts {
     fn holds_each<'a>(obstacles: impl Iterator<Item = &'a Obstacle> + Clone, motion: f32) -> bool {
         let deep = BALL_MOTIONS * motion;
         obstacles.clone().next().is_some()
-            && obstacles.clone().all(|o| {
-                o.is_still()
-                    && pieces(&*o.shape)
-                        .all(|(_, _, shape)| shape.is_convex() || is_held_mesh(shape))
-            })
+            && obstacles.clone().all(|o| o.is_still() && held_shape(o))
             && obstacles
                 .flat_map(|o| pieces(&*o.shape))
                 .all(|(_, _, shape)| {
@@ -239,9 +238,7 @@ impl LaneContacts {
         let still = obstacles.iter().filter(|o| o.is_still());
         still.clone().next().is_some()
             && obstacles.iter().any(|o| !o.is_still())
-            && still.into_iter().all(|o| {
-                pieces(&*o.shape).all(|(_, _, shape)| shape.is_convex() || is_held_mesh(shape))
-            })
+            && still.into_iter().all(held_shape)
     }
 
     /// [`Self::begin_holding`] of every obstacle or none: whether it holds
