@@ -1,20 +1,20 @@
 //! Bodies held up by the cloth they press against other obstacles: a
-//! ball resting on a tablecloth on a table, or on a cloth over a crate. The particle pass pushes each
-//! particle out of every obstacle in turn, and hands the body the momentum
-//! the particle lost; a particle between a ball and a table cannot make
-//! room, and the little momentum it has cannot hold a body a thousand
-//! times heavier. The ball sank into the cloth, squeezing it out sideways:
+//! ball resting on a tablecloth on a table, or on a cloth over a crate.
+//! The particle pass pushes each particle out of every obstacle in turn,
+//! and hands the body the momentum the particle lost; a particle between
+//! a ball and a table cannot make room, and the little momentum it has
+//! cannot hold a body a thousand times heavier. The ball sank into the cloth, squeezing it out sideways:
 //! a 1 kg ball on a 64² cotton tablecloth on a table left it 9% stretched,
 //! and the stage's stretch hold and the rounds after it
 //! (`solver/contact_follow.rs`) fought the squeeze every substep, 200 ms a
 //! frame.
 //!
 //! So the pass records each particle a dynamic body presses against an
-//! immovable obstacle ([`Backed`]), and the body then meets those particles as it would meet the
-//! obstacle itself: sequential impulses over them, along the immovable
-//! obstacle's normal (the only way it can push back), stop the body
-//! coming closer and lift it by a share of the layers' overlap
-//! ([`SUPPORT_LIFT`]). A particle pressed between two dynamic bodies
+//! immovable obstacle ([`Backed`]), and the body then meets those
+//! particles as it would meet the obstacle itself: sequential impulses
+//! over them, along the immovable obstacle's normal (the only way it can
+//! push back), stop the body coming closer and lift it by a share of the
+//! layers' overlap ([`SUPPORT_LIFT`]). A particle pressed between two dynamic bodies
 //! (and no immovable obstacle) pushes the two apart the same way, as two
 //! bodies in contact: a 1 kg ball on a 32² cotton sheet over a 20 kg
 //! crate sank 12 mm into the cloth's two 1 cm layers and left it 12.5%

@@ -46,8 +46,8 @@ pub(super) struct BlockScratch {
     pub pinned_close: bool,
     /// The farthest (squared, m²) this pass moved a particle of the block.
     pub shift2: f32,
-    /// Particles of the block pressed by a dynamic body against an
-    /// immovable obstacle, in particle order ([`Backed`]).
+    /// Particles of the block pressed by a dynamic body against another
+    /// obstacle, in particle order ([`Backed`]).
     pub backed: Vec<Backed>,
 }
 

@@ -157,8 +157,8 @@ pub struct CollisionStage {
     pub(super) hold_watch: Vec<u64>,
     /// Per block of the particle pass: its scratch.
     blocks: Vec<BlockScratch>,
-    /// The particles a dynamic body presses against an immovable
-    /// obstacle, in block and particle order (scratch of [`Self::resolve`]).
+    /// The particles a dynamic body presses against another obstacle, in
+    /// block and particle order (scratch of [`Self::resolve`]).
     backed: Vec<Backed>,
     /// The impulses (N·s) of the backed particles' support, and the
     /// bodies' motion through it (scratch).
@@ -458,8 +458,8 @@ impl CollisionStage {
                 }
             }
         }
-        // Bodies pressing particles against immovable obstacles are held
-        // up by them (in block and particle order: the same bits on any
+        // Bodies pressing particles against other obstacles are held up
+        // by them (in block and particle order: the same bits on any
         // number of threads).
         self.backed.clear();
         for block in &self.blocks[..blocks] {

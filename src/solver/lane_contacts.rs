@@ -250,19 +250,18 @@ impl LaneContacts {
         (thickness, motion): (f32, f32),
         n: usize,
     ) -> bool {
-        self.begin_holding(obstacles, (thickness, motion, false), n) == Holding::All
+        self.begin_holding(obstacles, (thickness, motion), n) == Holding::All
     }
 
     /// Takes `obstacles` for a substep of `n` lanes in which no particle
     /// moves further than `motion` (m), their surfaces moved out by
     /// `thickness` (m); clears every lane's record. Returns which it
     /// holds: all ([`Self::holds`]), or the still ones among moving or
-    /// dynamic bodies, when `still` and [`Self::holds`] would hold those;
-    /// else none.
+    /// dynamic bodies, when [`Self::holds`] would hold those; else none.
     pub fn begin_holding(
         &mut self,
         obstacles: &[Obstacle],
-        (thickness, motion, still): (f32, f32, bool),
+        (thickness, motion): (f32, f32),
         n: usize,
     ) -> Holding {
         self.shapes.clear();
@@ -271,8 +270,7 @@ impl LaneContacts {
         self.meshes.begin();
         let holding = if Self::holds(obstacles, motion) {
             Holding::All
-        } else if still
-            && obstacles.iter().any(|o| !o.is_still())
+        } else if obstacles.iter().any(|o| !o.is_still())
             && Self::holds_each(obstacles.iter().filter(|o| o.is_still()), motion)
         {
             Holding::Still

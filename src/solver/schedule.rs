@@ -44,7 +44,7 @@ use super::substeps::{self_collision_substeps, MAX_SELF_SUBSTEP};
 use super::xpbd;
 use crate::cloth::{Cloth, LaneGrid, Particles, SpringKind};
 use crate::collision::{
-    any_stretch_over_limit, FrictionPolicy, LookBasis, Obstacle, ResolveOptions, SelfContactParams,
+    any_stretch_over_limit, LookBasis, Obstacle, ResolveOptions, SelfContactParams,
 };
 use crate::context::StepContext;
 use crate::error::{positive, ClothError};
@@ -484,22 +484,15 @@ impl ClothSolver {
             // Resolve contacts, by the friction policy the integrator handed back.
             // Where the lanes held the still obstacles among moving or
             // dynamic bodies, the stage answers for the bodies alone before
-            // the last substep, and for all at it, where the lanes' friction
-            // is not applied again (as where they held every contact).
-            let last = substep + 1 == k;
-            let skip_still = outcome.still_held && !last;
-            let friction = if outcome.still_held && last {
-                FrictionPolicy::AlreadySolved
-            } else {
-                outcome.friction
-            };
+            // the last substep, and for all at it.
+            let skip_still = outcome.still_held && substep + 1 < k;
             let touched = ws.collision.resolve(
                 &ctx,
                 &mut cloth.particles,
                 &cloth.topology.springs,
                 obstacles,
                 ResolveOptions {
-                    friction,
+                    friction: outcome.friction,
                     skip_still,
                     edges,
                     stretch_limit: cloth.material.stretch_limit_factor(),

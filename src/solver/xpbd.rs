@@ -163,8 +163,9 @@ pub(crate) fn step(
     let h = sub.ctx.h;
     let n = x.len();
     // Where the substep starts, before the prediction moves `x`. Not
-    // where the lanes may hold every contact (a cuboid among them): they
-    // hold it instead, or the collision stage does after the substep.
+    // where the lanes may hold every contact (a cuboid among them), or
+    // every still obstacle's among moving or dynamic bodies: they hold
+    // it instead, or the collision stage does after the substep.
     if LaneContacts::may_hold(sub.obstacles) || LaneContacts::may_hold_still(sub.obstacles) {
         ws.planes.clear();
     } else {
@@ -288,8 +289,7 @@ pub(crate) fn step(
             }
             let motion = f32::from_bits(fastest.into_inner()).sqrt() * h;
             let contacts = &mut ws.lane_contacts;
-            let holding =
-                contacts.begin_holding(sub.obstacles, (sub.ctx.thickness, motion, true), n);
+            let holding = contacts.begin_holding(sub.obstacles, (sub.ctx.thickness, motion), n);
             let held = holding != Holding::None;
             if held {
                 contacts.take_planes(sub.obstacles, l, team);
