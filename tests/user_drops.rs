@@ -217,11 +217,21 @@ fn a_ball_dropped_on_a_laid_table_rests_on_the_cloth() {
         (bottom - (0.75 + 2.0 * thickness)).abs() < 0.005,
         "the ball's bottom at {bottom}"
     );
-    assert!(at.x.abs() < 0.4 && at.z.abs() < 0.4, "the ball at {at}");
+    // Where it landed, not rolling: pushed up along the table's normal
+    // at the particles beside its lowest point, the support spun it at up
+    // to 11 rad/s in place.
+    let landed = Vector::new(0.1, 0.0, 0.05);
+    let off = (Vector::new(at.x, 0.0, at.z) - landed).length();
+    assert!(off < 0.01, "the ball at {at}, {off} m from where it fell");
     assert!(
         body.linvel().length() < 0.1,
         "still moving: {}",
         body.linvel()
+    );
+    assert!(
+        body.angvel().length() < 0.5,
+        "spinning at {} rad/s",
+        body.angvel().length()
     );
     // The cloth under it lies on the top.
     let lowest_under = sim
@@ -234,6 +244,43 @@ fn a_ball_dropped_on_a_laid_table_rests_on_the_cloth() {
         (lowest_under - (0.75 + thickness)).abs() < 0.003,
         "the cloth under it at {lowest_under}"
     );
+}
+
+/// A 1 kg box thrown onto a laid table at 1 m/s across it: pressing the
+/// cloth onto the top, it cannot slide over it freely. Before, the
+/// backed particles held it up without friction, and the box slid on at
+/// 0.9 m/s, off the far edge.
+#[test]
+fn a_box_thrown_onto_a_laid_table_stops_on_the_cloth() {
+    let mut world = PhysicsWorld::new();
+    world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.73, 0.0)),
+        ColliderBuilder::cuboid(0.45, 0.02, 0.45),
+    );
+    let (thrown, _) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(-0.2, 1.1, 0.0))
+            .linvel(Vector::new(1.0, 0.0, 0.0)),
+        ColliderBuilder::cuboid(0.06, 0.04, 0.06).mass(1.0),
+    );
+    let mut sim = cotton_sheet(40, 1.2, Vector::new(0.0, 0.95, 0.0));
+    lands_on_the_top(&mut sim, &mut world, inside_square_top(0.45, 0.02, 0.75));
+    let body = &world.bodies[thrown];
+    let (at, thickness) = (body.translation(), sim.cloth.params.thickness);
+    // It lands near x = 0.05 m; sliding at 1 m/s with the coefficient 0.5
+    // it would stop within 0.1 m (v² / 2μg), and sooner for the landing's
+    // own push.
+    assert!(at.x < 0.2, "slid on to x = {}", at.x);
+    assert!(
+        (at.y - 0.04 - (0.75 + 2.0 * thickness)).abs() < 0.005,
+        "the box at {at}"
+    );
+    // And stays there: it slides no further over half a second (its
+    // rocking on the cloth's layers aside, a few mm/s at its centre).
+    run(&mut sim, &mut world, 30);
+    let then = world.bodies[thrown].translation();
+    let slid = (Vector::new(then.x - at.x, 0.0, then.z - at.z)).length();
+    assert!(slid < 0.005, "slid {slid} m more, to {then}");
 }
 
 /// A 1 kg ball dropped on a cloth lying on a 20 kg dynamic crate: the

@@ -251,6 +251,7 @@ impl ParticlePass<'_> {
                 backer: s as u32,
                 point: x,
                 normal: -on_s.normal,
+                lever: on_d.normal,
                 depth,
                 velocity: held,
             });

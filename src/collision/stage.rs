@@ -5,7 +5,7 @@
 
 use parry3d::bounding_volume::Aabb;
 
-use super::backing::{support_backed, Backed, Moving};
+use super::backing::{support_backed, Backed, Moving, Support};
 use super::contact_set::{ContactSet, ParticleContact, NONE};
 use super::obstacle::{Obstacle, ObstacleImpulse};
 use super::particle_pass::{BlockOut, BlockScratch, ParticlePass, BLOCK, CONTACT_SLACK};
@@ -162,7 +162,7 @@ pub struct CollisionStage {
     backed: Vec<Backed>,
     /// The impulses (N·s) of the backed particles' support, and the
     /// bodies' motion through it (scratch).
-    support: Vec<f32>,
+    support: Vec<Support>,
     moving: Vec<Moving>,
     /// Per block of [`EDGE_BLOCK`] springs: those the edge pass must look at.
     edge_blocks: Vec<EdgeList>,

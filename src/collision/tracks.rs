@@ -383,6 +383,16 @@ impl ObstacleTracks {
         }
     }
 
+    /// Records momentum `j` (N·s) handed to obstacle `o` through its
+    /// centre of mass `com` (m), with angular momentum `spin` (N·m·s)
+    /// about it: a push whose turn is not that of `j` at one point.
+    pub fn add_impulse_and_spin(&mut self, o: usize, com: Vector, j: Vector, spin: Vector) {
+        if let Some(imp) = self.impulses.get_mut(o) {
+            imp.linear += j;
+            imp.angular_about_origin += com.cross(j) + spin;
+        }
+    }
+
     /// Momentum handed to each obstacle during the current step.
     pub fn impulses(&self) -> &[ObstacleImpulse] {
         &self.impulses
