@@ -46,23 +46,23 @@ const ROUNDS: usize = 16;
 /// rounds of the relaxed stretch limit over the whole cloth (its passes by
 /// the substep, `relaxed_passes`) and the obstacles' push out to
 /// `thickness` (m), while a stretch spring is over the limit (module
-/// docs).
+/// docs). Returns the rounds taken.
 pub(crate) fn follow_contacts(
     cloth: &mut Cloth,
     obstacles: &[Obstacle],
     ws: &mut Workspace,
     (thickness, h, team): (f32, f32, Team),
-) {
+) -> u32 {
     let factor = cloth.material.stretch_limit_factor();
     if !factor.is_finite() || obstacles.is_empty() {
-        return;
+        return 0;
     }
     let springs = &cloth.topology.springs;
     let revision = cloth.mass_revision();
     let p = &mut cloth.particles;
-    for _ in 0..ROUNDS {
+    for round in 0..ROUNDS {
         if !any_stretch_over_limit(springs, &p.x, factor, team) {
-            return;
+            return round as u32;
         }
         limit_stretch_supported(
             &mut ws.pin_support,
@@ -74,4 +74,5 @@ pub(crate) fn follow_contacts(
         ws.collision
             .project_positions(&mut p.x, &p.inv_mass, obstacles, thickness);
     }
+    ROUNDS as u32
 }

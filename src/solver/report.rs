@@ -37,6 +37,12 @@ pub struct StepReport {
     /// half the margin relative to the others).
     #[serde(default)]
     pub self_looks: u32,
+    /// Rounds of the stretch limit and the obstacles after the collision
+    /// stage, summed over the substeps (`contact_follow.rs`; each a pass
+    /// over every stretch spring): 0 in most steps, a few where an
+    /// obstacle's push stretched the cloth past its limit.
+    #[serde(default)]
+    pub follow_rounds: u32,
     /// Stretch springs that tore at the end of the step (0 unless the
     /// material has a tear strain); see [`crate::solver::ClothSolver::tear_events`].
     #[serde(default)]

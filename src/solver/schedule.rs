@@ -502,7 +502,8 @@ impl ClothSolver {
             );
             report.contacts += touched;
             if follows && touched > 0 {
-                follow_contacts(cloth, obstacles, ws, (ctx.thickness, h, team));
+                let within = (ctx.thickness, h, team);
+                report.follow_rounds += follow_contacts(cloth, obstacles, ws, within);
             }
             watch.lap(&mut times.contacts);
         }
