@@ -193,10 +193,7 @@ fn a_tablecloth_dropped_on_a_table_drapes_without_stretching() {
 fn a_ball_dropped_on_a_laid_table_rests_on_the_cloth() {
     let mut world = PhysicsWorld::new();
     // A table top 0.9 × 0.9 m at y = 0.75, on a leg.
-    world.insert(
-        RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.73, 0.0)),
-        ColliderBuilder::cuboid(0.45, 0.02, 0.45),
-    );
+    insert_table_top(&mut world);
     world.insert(
         RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.36, 0.0)),
         ColliderBuilder::cylinder(0.36, 0.04),
@@ -253,10 +250,7 @@ fn a_ball_dropped_on_a_laid_table_rests_on_the_cloth() {
 #[test]
 fn a_box_thrown_onto_a_laid_table_stops_on_the_cloth() {
     let mut world = PhysicsWorld::new();
-    world.insert(
-        RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.73, 0.0)),
-        ColliderBuilder::cuboid(0.45, 0.02, 0.45),
-    );
+    insert_table_top(&mut world);
     let (thrown, _) = world.insert(
         RigidBodyBuilder::dynamic()
             .translation(Vector::new(-0.2, 1.1, 0.0))
@@ -296,10 +290,7 @@ fn a_box_dropped_tilted_on_a_laid_table_lands_without_squeezing_the_cloth() {
         (Vector::new(0.6, 0.3, 0.0), 1.0),
     ] {
         let mut world = PhysicsWorld::new();
-        world.insert(
-            RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.73, 0.0)),
-            ColliderBuilder::cuboid(0.45, 0.02, 0.45),
-        );
+        insert_table_top(&mut world);
         let (dropped, _) = world.insert(
             RigidBodyBuilder::dynamic()
                 .translation(Vector::new(0.1, 1.4, 0.0))
@@ -668,6 +659,16 @@ fn cotton_sheet(n: usize, size: f32, at: Vector) -> Simulation {
         .build()
         .unwrap();
     Simulation::new(cloth)
+}
+
+/// Puts a fixed table top, 0.9 × 0.9 m and 4 cm thick with its surface
+/// at y = 0.75 m, in `world` (the one `inside_square_top(0.45, 0.02,
+/// 0.75)` measures).
+fn insert_table_top(world: &mut PhysicsWorld) {
+    world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.73, 0.0)),
+        ColliderBuilder::cuboid(0.45, 0.02, 0.45),
+    );
 }
 
 /// How far a point is inside a square table top (m; 0 outside): `half`
