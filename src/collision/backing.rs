@@ -106,9 +106,10 @@ pub(super) struct Moving {
 /// contact. Sequential impulses from the velocities each body will have
 /// over the next substep of `h` seconds, lifting by [`SUPPORT_LIFT`] of
 /// the overlap per step of `dt` seconds, with Coulomb friction against
-/// sliding along an immovable backer (module docs). The momentum goes to the bodies
-/// (and to rapier) as any particle's push does; an immovable obstacle
-/// behind the particle gives it. `support` and `moving` are scratch.
+/// sliding along an immovable backer (module docs). The momentum goes to
+/// the bodies (and to rapier) as any particle's push does; an immovable
+/// obstacle behind the particle gives it. `support` and `moving` are
+/// scratch.
 pub(super) fn support_backed(
     tracks: &mut ObstacleTracks,
     obstacles: &[Obstacle],

@@ -212,8 +212,9 @@ impl ParticlePass<'_> {
                 // Pushed out along a box's corner, the particle under it
                 // stretched its springs past the limit, which the rounds
                 // after the stage (`contact_follow.rs`) then fought every
-                // substep: a 1 kg box landing tilted on the laid table
-                // took 80–420 ms in that frame; 27–36 ms now.
+                // substep: a box landing tilted on the laid table took
+                // 117–431 ms in that frame in six drops of ten; 29–37 ms
+                // now (BENCHMARKS.md, forty-second session).
                 let moved = out.x[k] - before;
                 out.x[k] = before + s.1 * moved.dot(s.1);
                 self.back(k, (s.0, d.0, s.2), out, scratch);
