@@ -54,12 +54,13 @@ pub(super) struct Backed {
     /// centre on its first few backed particles was kicked sideways at
     /// 0.35 m/s and rolled off the table).
     pub normal: Vector,
-    /// The body's own outward normal (unit) at the particle: against an
-    /// immovable backer the body turns as if pushed along it. A ball is
+    /// The direction (unit) the body turns as if pushed along: against an
+    /// immovable backer, its own outward normal at the particle. A ball is
     /// pushed through its centre and does not turn; pushed along `normal`
     /// at the particles beside its lowest point, one resting on the laid
     /// table spun in place at up to 11 rad/s (and rolled away, once the
-    /// support had friction).
+    /// support had friction). Against another dynamic body, `normal`
+    /// itself ([`support_backed`] says why).
     pub lever: Vector,
     /// How far (m) the two thickness layers overlap.
     pub depth: f32,
@@ -126,17 +127,11 @@ pub(super) fn support_backed(
     }));
     let body = |o: u32| obstacles.get(o as usize).and_then(|b| b.body.as_ref());
     // Between two dynamic bodies, neither the turn along the body's own
-    // normal nor friction: with them a 1 kg ball on cloth over a 20 kg
-    // crate (which this step pushes down, its floor only in rapier's
-    // step) rolled off its spot and left the cloth 7.5% stretched, not
-    // 5.7%. README's known limits say so.
-    let lever = |c: &Backed| {
-        if body(c.backer).is_some() {
-            c.normal
-        } else {
-            c.lever
-        }
-    };
+    // normal (`Backed::lever` is `normal` there) nor friction: with
+    // either a 1 kg ball on cloth over a 20 kg crate (which this step
+    // pushes down, its floor only in rapier's step) rolled off its spot
+    // and left the cloth 7.5% stretched, not 5.7%. README's known limits
+    // say so.
     let friction = |c: &Backed| {
         let of = |o: u32| obstacles.get(o as usize).map_or(0.0, |o| o.friction);
         if body(c.backer).is_some() {
@@ -155,9 +150,9 @@ pub(super) fn support_backed(
             let n = c.normal;
             let a = moving[c.obstacle as usize];
             let ra = c.point - a.com;
-            // Along `normal` for the body's motion, along its own normal
-            // for its turn (`Backed::lever`), against an immovable backer.
-            let rna = ra.cross(lever(c));
+            // Along `normal` for the body's motion, along `lever` for its
+            // turn.
+            let rna = ra.cross(c.lever);
             let mut k = n.dot(pressing.inverse_mass * n) + rna.dot(pressing.inverse_inertia * rna);
             // The backer's surface velocity, and its share of the mass.
             let (backer, mut surface, mut rnb) = (body(c.backer), c.velocity, Vector::ZERO);
@@ -218,14 +213,14 @@ pub(super) fn support_backed(
             a.w += pressing.inverse_inertia * ra.cross(change);
         }
     }
-    // Handed on with the turn the rounds gave: the support's along the
-    // body's own normal (`Backed::lever`), friction's at the particle.
+    // Handed on with the turn the rounds gave: the support's along
+    // `lever`, friction's at the particle.
     for (c, held) in backed.iter().zip(support.iter()) {
         if held.normal > 0.0 {
             let com = moving[c.obstacle as usize].com;
             let ra = c.point - com;
             let on_body = held.friction - c.normal * held.normal;
-            let spin = ra.cross(held.friction - lever(c) * held.normal);
+            let spin = ra.cross(held.friction - c.lever * held.normal);
             tracks.add_impulse_and_spin(c.obstacle as usize, com, on_body, spin);
             if body(c.backer).is_some() {
                 tracks.add_impulse(c.backer as usize, c.point, -on_body);

@@ -257,12 +257,18 @@ impl ParticlePass<'_> {
         };
         let depth = 2.0 * self.ctx.thickness - (on_s.signed_distance + on_d.signed_distance);
         if depth > 0.0 && depth.is_finite() {
+            // Against another dynamic body, along the push (`Backed::lever`).
+            let lever = if self.obstacles[s].body.is_some() {
+                -on_s.normal
+            } else {
+                on_d.normal
+            };
             scratch.backed.push(Backed {
                 obstacle: d as u32,
                 backer: s as u32,
                 point: x,
                 normal: -on_s.normal,
-                lever: on_d.normal,
+                lever,
                 depth,
                 velocity: held,
             });
