@@ -59,6 +59,11 @@ pub(crate) struct ObstacleTracks {
     cached: Vec<u32>,
     cache_margin: f32,
     listed: Vec<u32>,
+    /// Per obstacle: whether it stays where it is ([`Obstacle::is_still`]).
+    still: Vec<bool>,
+    /// Per particle: whether its cached list holds an obstacle that is not
+    /// still (a moving or dynamic body).
+    near_moving: Vec<bool>,
 }
 
 /// The step's cache for some particles, as [`ObstacleTracks::cache_for`]
@@ -96,11 +101,14 @@ impl ObstacleTracks {
         self.analytic.clear();
         self.analytic
             .extend(obstacles.iter().map(|o| Analytic::of(&*o.shape)));
+        self.still.clear();
+        self.still.extend(obstacles.iter().map(Obstacle::is_still));
         self.place_bounds();
         self.anchors.iter_mut().for_each(Vec::clear);
         self.cache_start.clear();
         self.cached.clear();
         self.listed.clear();
+        self.near_moving.clear();
         self.com.clear();
         self.com_velocity.clear();
         self.angvel.clear();
@@ -154,6 +162,14 @@ impl ObstacleTracks {
         self.listed.clear();
         self.listed
             .extend(self.cache_start.windows(2).map(|w| (w[0] != w[1]) as u32));
+        let (cached, still) = (&self.cached, &self.still);
+        self.near_moving.clear();
+        self.near_moving
+            .extend(self.cache_start.windows(2).map(|w| {
+                cached[w[0] as usize..w[1] as usize]
+                    .iter()
+                    .any(|&o| !still[o as usize])
+            }));
     }
 
     /// The candidates of particle `i` at `point`, into `out`: the same
@@ -297,6 +313,20 @@ impl ObstacleTracks {
         let from_anchor = point - anchor;
         let listed = self.cache_start.get(i..i + 2).is_none_or(|c| c[0] != c[1]);
         if listed || from_anchor.abs().max_element() > self.cache_margin {
+            return None;
+        }
+        Some(from_anchor.length_squared())
+    }
+
+    /// As [`Self::free_drift2`], for a particle whose cached candidates are
+    /// all still obstacles (none that moves or is a dynamic body): a pass
+    /// over the bodies alone passes it by as it does a free one.
+    #[inline]
+    pub(super) fn still_only_drift2(&self, i: usize, point: Vector) -> Option<f32> {
+        let anchor = self.anchor(i)?;
+        let from_anchor = point - anchor;
+        let near_moving = self.near_moving.get(i).is_none_or(|&m| m);
+        if near_moving || from_anchor.abs().max_element() > self.cache_margin {
             return None;
         }
         Some(from_anchor.length_squared())
