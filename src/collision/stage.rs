@@ -329,24 +329,31 @@ impl CollisionStage {
         }
     }
 
-    /// Pushes free particles out to the thickness, positions only. Used
-    /// inside iterative solvers so that they converge to a state outside the
-    /// obstacles; such solvers apply friction themselves.
+    /// Pushes free particles out to the thickness, positions only, and
+    /// calls `moved` with each one it moved. Used inside iterative solvers
+    /// so that they converge to a state outside the obstacles; such solvers
+    /// apply friction themselves.
     pub fn project_positions(
         &mut self,
         x: &mut [Vector],
         inv_mass: &[f32],
         obstacles: &[Obstacle],
         thickness: f32,
+        mut moved: impl FnMut(usize),
     ) {
         if obstacles.is_empty() {
             return;
         }
+        let bits = |p: Vector| p.to_array().map(f32::to_bits);
         for i in 0..x.len() {
             if inv_mass[i] == 0.0 {
                 continue;
             }
+            let before = bits(x[i]);
             self.move_out(&mut x[i], None, obstacles, thickness);
+            if bits(x[i]) != before {
+                moved(i);
+            }
         }
     }
 

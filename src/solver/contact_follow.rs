@@ -65,14 +65,18 @@ pub(crate) fn follow_contacts(
             return round as u32;
         }
         limit_stretch_supported(
-            &mut ws.pin_support,
+            &mut ws.relaxed_limit,
             (springs, &p.inv_mass, revision),
             (&mut p.x, Some(&mut p.v)),
             factor,
-            relaxed_passes(h),
+            // From the last round's passes on: what moved since is noted.
+            (relaxed_passes(h), round > 0),
         );
+        let limit = &mut ws.relaxed_limit;
         ws.collision
-            .project_positions(&mut p.x, &p.inv_mass, obstacles, thickness);
+            .project_positions(&mut p.x, &p.inv_mass, obstacles, thickness, |i| {
+                limit.moved(i)
+            });
     }
     ROUNDS as u32
 }

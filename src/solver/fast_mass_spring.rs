@@ -265,7 +265,7 @@ pub(crate) fn step(
                 };
             }
         }
-        collision.project_positions(x, model.inv_mass, sub.obstacles, sub.ctx.thickness);
+        collision.project_positions(x, model.inv_mass, sub.obstacles, sub.ctx.thickness, |_| {});
     }
     let inv_h = 1.0 / h;
     for &i in &factor.particle {

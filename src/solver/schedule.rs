@@ -417,11 +417,11 @@ impl ClothSolver {
             let springs = &cloth.topology.springs;
             if relaxed_limit {
                 limit_stretch_supported(
-                    &mut ws.pin_support,
+                    &mut ws.relaxed_limit,
                     (springs, &p.inv_mass, revision),
                     (&mut p.x, Some(&mut p.v)),
                     factor,
-                    relaxed_passes(h),
+                    (relaxed_passes(h), false),
                 );
             } else if !limits_itself || self_touching > 0 || tethered {
                 limit_stretch(springs, &p.inv_mass, &mut p.x, Some(&mut p.v), factor);

@@ -5,7 +5,7 @@
 
 use super::fast_mass_spring::FastMassSpringState;
 use super::implicit_euler::ImplicitState;
-use super::pin_support::PinSupport;
+use super::strain_limit::RelaxedLimit;
 use super::tearing::Tearing;
 use super::tethers::Tethers;
 use super::xpbd::XpbdScratch;
@@ -44,8 +44,9 @@ pub(crate) struct Workspace {
     /// The tethers of the cloth last stepped (rebuilt when its pins change).
     pub tethers: Tethers,
     /// The stretch limit's weights near pins for the integrators that do
-    /// not hold the limit themselves (`pin_support.rs`).
-    pub pin_support: PinSupport,
+    /// not hold the limit themselves (`pin_support.rs`), and its passes'
+    /// scratch.
+    pub relaxed_limit: RelaxedLimit,
     /// The longest stretch or shear rest length (m) of the cloth last
     /// stepped, and its mass revision then.
     pub longest_rest: Option<(u64, f32)>,

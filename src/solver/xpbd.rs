@@ -50,9 +50,9 @@ use super::grid_sweep::{
 };
 use super::lane_contacts::{Holding, LaneContacts};
 use super::lane_motion::{self, Motion};
-use super::pin_support::PinSupport;
 use super::settings::SolverSettings;
 use super::strain_limit;
+use super::strain_limit::RelaxedLimit;
 use super::substep::Substep;
 
 /// Scratch of the small-steps solver.
@@ -69,8 +69,9 @@ pub(crate) struct XpbdScratch {
     /// Structure-of-arrays copies for the grid sweep.
     lanes: Lanes,
     /// The stretch limit's weights near pins for a cloth without a grid
-    /// plan (`pin_support.rs`; a grid plan holds its own, by lane).
-    pin_support: PinSupport,
+    /// plan (`pin_support.rs`; a grid plan holds its own, by lane), and
+    /// its passes' scratch.
+    relaxed_limit: RelaxedLimit,
     /// Per spring: its multiplier over the substep's sweeps (the general sweep).
     lambda: Vec<f32>,
     /// The particles packed for the general sweep (`general_sweep.rs`).
@@ -455,11 +456,11 @@ pub(crate) fn step(
             // A pinned cloth's limit moves particles near the pins less, as
             // the grid's does (`pin_support.rs`).
             strain_limit::limit_stretch_supported(
-                &mut ws.pin_support,
+                &mut ws.relaxed_limit,
                 (springs, w, sub.mass_revision),
                 (x, None),
                 model.stretch_limit,
-                strain_limit::RELAXED_PASSES,
+                (strain_limit::RELAXED_PASSES, false),
             );
             for i in 0..n {
                 let correction = x[i] - ws.predicted[i];
