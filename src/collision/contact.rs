@@ -275,6 +275,20 @@ fn cuboid_contact(half: Vector, pose: &PoseF64, point: Vector) -> Option<Contact
     to_world(pose, surface, normal, -gaps[axis])
 }
 
+/// Whether [`cuboid_contact`] of `point` surely gives a signed distance of
+/// at least `distance` (m), told without its root and divisions: the
+/// point is outside the box, and the squared distance beyond a hair over
+/// `distance` squared (the contact's own distance then rounds to at least
+/// `distance`).
+#[inline(always)]
+pub(crate) fn cuboid_beyond(half: Vector, pose: &PoseF64, point: Vector, distance: f32) -> bool {
+    let local = local_f64(pose, point);
+    let h = half.as_dvec3();
+    let offset = local - local.clamp(-h, h);
+    let far = f64::from(distance) * (1.0 + 1.0e-6);
+    distance > 0.0 && offset.length_squared() > far * far
+}
+
 /// [`cuboid_contact`] of a point outside the box, for the particle pass's
 /// lanes (the same operations): the normal, the signed distance and
 /// whether the contact is finite; and whether the point is inside the box

@@ -68,6 +68,11 @@ impl CollisionStage {
             }
             for &t in samples {
                 let sample = p.x[a] * (1.0 - t) + p.x[b] * t;
+                // Most samples near a box are clear of it: told without the
+                // contact's root and divisions (the same samples pass).
+                if self.tracks.contact_beyond(o, sample, margin) {
+                    continue;
+                }
                 let Some(contact) = self.tracks.contact(obstacles, o, sample) else {
                     continue;
                 };

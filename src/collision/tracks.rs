@@ -6,7 +6,7 @@
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 
-use super::contact::{contact_prepared, Analytic, Contact, PoseF64};
+use super::contact::{contact_prepared, cuboid_beyond, Analytic, Contact, PoseF64};
 use super::obstacle::{DynamicBody, Obstacle, ObstacleImpulse};
 use super::one_obstacle::{LaneShape, OneObstacleLaw};
 use crate::math::{Pose, Rotation, Vector};
@@ -353,6 +353,17 @@ impl ObstacleTracks {
             &self.poses_f64[o],
             point,
         )
+    }
+
+    /// Whether the contact of `point` with obstacle `o` surely lies at least
+    /// `distance` (m) out, told cheaply (a cuboid's, [`cuboid_beyond`]);
+    /// false when not sure.
+    #[inline(always)]
+    pub(super) fn contact_beyond(&self, o: usize, point: Vector, distance: f32) -> bool {
+        match self.analytic[o] {
+            Analytic::Cuboid(half) => cuboid_beyond(half, &self.poses_f64[o], point, distance),
+            _ => false,
+        }
     }
 
     /// Obstacle candidates whose bounds meet `region`, into `self.candidates`.
