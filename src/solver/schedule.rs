@@ -149,6 +149,11 @@ impl ClothSolver {
         let longest_rest = if edges { longest_rest(ws, cloth) } else { 0.0 };
         let reach = cloth.params.thickness + longest_rest;
         ws.collision.begin_step(obstacles, dt, reach, n);
+        // The relaxed limit's scratch made for the cloth now, so that the
+        // first step whose contacts call it allocates nothing.
+        if cloth.material.stretch_limit_factor().is_finite() {
+            ws.relaxed_limit.prepare(&cloth.topology.springs, n);
+        }
         let margin = candidate_margin(cloth, dt);
         if integrator == Integrator::Xpbd && LaneContacts::may_hold(obstacles) {
             // xpbd's lanes may hold every contact of the step, and the

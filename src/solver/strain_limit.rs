@@ -91,6 +91,13 @@ pub(crate) struct RelaxedLimit {
 }
 
 impl RelaxedLimit {
+    /// Makes the scratch for the stretch `springs` of `particles` (found
+    /// again only when they change), so that a later call allocates
+    /// nothing.
+    pub(crate) fn prepare(&mut self, springs: &Springs, particles: usize) {
+        self.dirty.begin(springs, particles, false);
+    }
+
     /// Notes that particle `i` moved since the last call, between calls
     /// that carry on (`contact_follow.rs`: the obstacles' push between its
     /// rounds).
