@@ -65,14 +65,14 @@ pub(crate) fn follow_contacts(
             return round as u32;
         }
         limit_stretch_supported(
-            &mut ws.relaxed_limit,
+            &mut ws.limit_scratch,
             (springs, &p.inv_mass, revision),
             (&mut p.x, Some(&mut p.v)),
             factor,
             // From the last round's passes on: what moved since is noted.
             (relaxed_passes(h), round > 0),
         );
-        let limit = &mut ws.relaxed_limit;
+        let limit = &mut ws.limit_scratch;
         ws.collision
             .project_positions(&mut p.x, &p.inv_mass, obstacles, thickness, |i| {
                 limit.moved(i)

@@ -152,7 +152,7 @@ impl ClothSolver {
         // The relaxed limit's scratch made for the cloth now, so that the
         // first step whose contacts call it allocates nothing.
         if cloth.material.stretch_limit_factor().is_finite() {
-            ws.relaxed_limit.prepare(&cloth.topology.springs, n);
+            ws.limit_scratch.prepare(&cloth.topology.springs, n);
         }
         let margin = candidate_margin(cloth, dt);
         if integrator == Integrator::Xpbd && LaneContacts::may_hold(obstacles) {
@@ -422,14 +422,20 @@ impl ClothSolver {
             let springs = &cloth.topology.springs;
             if relaxed_limit {
                 limit_stretch_supported(
-                    &mut ws.relaxed_limit,
+                    &mut ws.limit_scratch,
                     (springs, &p.inv_mass, revision),
                     (&mut p.x, Some(&mut p.v)),
                     factor,
                     (relaxed_passes(h), false),
                 );
             } else if !limits_itself || self_touching > 0 || tethered {
-                limit_stretch(springs, &p.inv_mass, &mut p.x, Some(&mut p.v), factor);
+                let (x, v) = (&mut p.x[..], Some(&mut p.v[..]));
+                limit_stretch(
+                    &mut ws.limit_scratch,
+                    (springs, &p.inv_mass),
+                    (x, v),
+                    factor,
+                );
             }
             // Self-collision moved particles the lanes had put out of the
             // obstacles: they are put out again at once (the stage runs

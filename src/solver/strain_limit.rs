@@ -71,26 +71,37 @@ const OVER_RELAXATION: f32 = 1.9;
 /// Holds every stretch spring to at most `factor` times its rest length,
 /// moving the free particles' positions `x` (m); with velocities `v`
 /// (m/s), takes away the ends' relative velocity that stretches a
-/// shortened spring. Returns the springs shortened.
+/// shortened spring, each pass after the first looking only at the springs
+/// whose ends moved (`scratch`, [`DirtySprings`]). Returns the springs
+/// shortened.
 pub(crate) fn limit_stretch(
-    springs: &Springs,
-    inv_mass: &[f32],
-    x: &mut [Vector],
-    v: Option<&mut [Vector]>,
+    scratch: &mut LimitScratch,
+    (springs, inv_mass): (&Springs, &[f32]),
+    (x, v): (&mut [Vector], Option<&mut [Vector]>),
     factor: f32,
 ) -> u32 {
-    limit_passes(springs, inv_mass, (x, v), factor, (PASSES, 1.0), None)
+    let dirty = &mut scratch.dirty;
+    dirty.begin(springs, x.len(), false);
+    limit_passes(
+        springs,
+        inv_mass,
+        (x, v),
+        factor,
+        (PASSES, 1.0),
+        Some(dirty),
+    )
 }
 
-/// Scratch of the relaxed limit ([`limit_stretch_supported`]): the pins'
-/// weights, and the springs its next pass looks at ([`DirtySprings`]).
+/// Scratch of the limit's passes ([`limit_stretch`],
+/// [`limit_stretch_supported`]): the pins' weights, and the springs the
+/// next pass looks at ([`DirtySprings`]).
 #[derive(Debug, Default, Clone)]
-pub(crate) struct RelaxedLimit {
+pub(crate) struct LimitScratch {
     support: PinSupport,
     dirty: DirtySprings,
 }
 
-impl RelaxedLimit {
+impl LimitScratch {
     /// Makes the scratch for the stretch `springs` of `particles` (found
     /// again only when they change), so that a later call allocates
     /// nothing.
@@ -190,15 +201,15 @@ fn limit_stretch_relaxed(
 /// without a grid plan, and of the cloth following its contacts. With
 /// `carry`, the call goes on from the last one's passes (the same cloth,
 /// `factor` and weights), every particle moved since noted with
-/// [`RelaxedLimit::moved`].
+/// [`LimitScratch::moved`].
 pub(crate) fn limit_stretch_supported(
-    scratch: &mut RelaxedLimit,
+    scratch: &mut LimitScratch,
     (springs, inv_mass, revision): (&Springs, &[f32], u64),
     (x, v): (&mut [Vector], Option<&mut [Vector]>),
     factor: f32,
     (passes, carry): (usize, bool),
 ) -> u32 {
-    let RelaxedLimit { support, dirty } = scratch;
+    let LimitScratch { support, dirty } = scratch;
     support.update(inv_mass, springs, |i| i, revision);
     let weight = support.weights(inv_mass.len()).unwrap_or(inv_mass);
     dirty.begin(springs, x.len(), carry);
@@ -302,7 +313,13 @@ mod tests {
         let pulled = x[14];
         let mut v = vec![Vector::ZERO; x.len()];
         v[14] = Vector::new(0.0, 1.0, 0.0);
-        let n = limit_stretch(&springs, &inv_mass, &mut x, Some(&mut v), 1.05);
+        let mut scratch = LimitScratch::default();
+        let n = limit_stretch(
+            &mut scratch,
+            (&springs, &inv_mass),
+            (&mut x, Some(&mut v)),
+            1.05,
+        );
         assert!(n > 0);
         for (i, p) in x.iter().enumerate() {
             cloth.set_position(i, *p).unwrap();
@@ -316,13 +333,15 @@ mod tests {
         assert!(v.iter().all(|v| v.length() <= 1.0));
         // Without a limit nothing moves.
         let before = x.clone();
-        let none = limit_stretch(&springs, &inv_mass, &mut x, None, f32::INFINITY);
+        let limits = (&springs, &inv_mass[..]);
+        let none = limit_stretch(&mut scratch, limits, (&mut x, None), f32::INFINITY);
         assert_eq!((none, x), (0, before));
     }
 
     /// The passes over the springs whose ends moved give the bits of the
     /// passes over every spring: from scratch, and carried on after moves
-    /// noted between calls, with passes enough to settle and too few.
+    /// noted between calls, with passes enough to settle and too few,
+    /// over-relaxed and plain.
     #[test]
     fn passes_over_the_moved_springs_give_the_bits_of_passes_over_all() {
         let cloth = ClothBuilder::new(12, 12).build().unwrap();
@@ -341,7 +360,7 @@ mod tests {
             *p += Vector::new(jitter(), jitter(), jitter()) * (0.8 * spacing);
         }
         let v = vec![Vector::new(0.0, -1.0, 0.5); x.len()];
-        for passes in [3, 80] {
+        for (passes, relaxation) in [(3, OVER_RELAXATION), (80, OVER_RELAXATION), (PASSES, 1.0)] {
             let (mut xa, mut va) = (x.clone(), v.clone());
             let (mut xb, mut vb) = (x.clone(), v.clone());
             let mut dirty = DirtySprings::default();
@@ -351,7 +370,7 @@ mod tests {
                     &w,
                     (&mut xa, Some(&mut va)),
                     1.05,
-                    (passes, OVER_RELAXATION),
+                    (passes, relaxation),
                     None,
                 );
                 dirty.begin(&springs, xb.len(), call > 0);
@@ -360,7 +379,7 @@ mod tests {
                     &w,
                     (&mut xb, Some(&mut vb)),
                     1.05,
-                    (passes, OVER_RELAXATION),
+                    (passes, relaxation),
                     Some(&mut dirty),
                 );
                 assert!(plain > 0, "passes {passes}, call {call}");

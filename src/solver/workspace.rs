@@ -5,7 +5,7 @@
 
 use super::fast_mass_spring::FastMassSpringState;
 use super::implicit_euler::ImplicitState;
-use super::strain_limit::RelaxedLimit;
+use super::strain_limit::LimitScratch;
 use super::tearing::Tearing;
 use super::tethers::Tethers;
 use super::xpbd::XpbdScratch;
@@ -43,10 +43,11 @@ pub(crate) struct Workspace {
     pub tearing: Tearing,
     /// The tethers of the cloth last stepped (rebuilt when its pins change).
     pub tethers: Tethers,
-    /// The stretch limit's weights near pins for the integrators that do
-    /// not hold the limit themselves (`pin_support.rs`), and its passes'
-    /// scratch.
-    pub relaxed_limit: RelaxedLimit,
+    /// The stretch limit's scratch for the integrators that do not hold
+    /// it themselves, the rounds after the contacts and the passes after
+    /// self-collision: its weights near pins (`pin_support.rs`) and the
+    /// springs its next pass looks at.
+    pub limit_scratch: LimitScratch,
     /// The longest stretch or shear rest length (m) of the cloth last
     /// stepped, and its mass revision then.
     pub longest_rest: Option<(u64, f32)>,

@@ -52,7 +52,7 @@ use super::lane_contacts::{Holding, LaneContacts};
 use super::lane_motion::{self, Motion};
 use super::settings::SolverSettings;
 use super::strain_limit;
-use super::strain_limit::RelaxedLimit;
+use super::strain_limit::LimitScratch;
 use super::substep::Substep;
 
 /// Scratch of the small-steps solver.
@@ -71,7 +71,7 @@ pub(crate) struct XpbdScratch {
     /// The stretch limit's weights near pins for a cloth without a grid
     /// plan (`pin_support.rs`; a grid plan holds its own, by lane), and
     /// its passes' scratch.
-    relaxed_limit: RelaxedLimit,
+    limit_scratch: LimitScratch,
     /// Per spring: its multiplier over the substep's sweeps (the general sweep).
     lambda: Vec<f32>,
     /// The particles packed for the general sweep (`general_sweep.rs`).
@@ -456,7 +456,7 @@ pub(crate) fn step(
             // A pinned cloth's limit moves particles near the pins less, as
             // the grid's does (`pin_support.rs`).
             strain_limit::limit_stretch_supported(
-                &mut ws.relaxed_limit,
+                &mut ws.limit_scratch,
                 (springs, w, sub.mass_revision),
                 (x, None),
                 model.stretch_limit,
