@@ -364,24 +364,20 @@ mod tests {
             let (mut xa, mut va) = (x.clone(), v.clone());
             let (mut xb, mut vb) = (x.clone(), v.clone());
             let mut dirty = DirtySprings::default();
+            let run = |x: &mut [Vector], v: &mut [Vector], dirty: Option<&mut DirtySprings>| {
+                limit_passes(
+                    &springs,
+                    &w,
+                    (x, Some(v)),
+                    1.05,
+                    (passes, relaxation),
+                    dirty,
+                )
+            };
             for call in 0..3 {
-                let plain = limit_passes(
-                    &springs,
-                    &w,
-                    (&mut xa, Some(&mut va)),
-                    1.05,
-                    (passes, relaxation),
-                    None,
-                );
+                let plain = run(&mut xa, &mut va, None);
                 dirty.begin(&springs, xb.len(), call > 0);
-                let skipping = limit_passes(
-                    &springs,
-                    &w,
-                    (&mut xb, Some(&mut vb)),
-                    1.05,
-                    (passes, relaxation),
-                    Some(&mut dirty),
-                );
+                let skipping = run(&mut xb, &mut vb, Some(&mut dirty));
                 assert!(plain > 0, "passes {passes}, call {call}");
                 assert_eq!(plain, skipping, "passes {passes}, call {call}");
                 let bits = |p: &[Vector]| -> Vec<[u32; 3]> {
