@@ -346,7 +346,10 @@ impl CollisionStage {
         }
         let bits = |p: Vector| p.to_array().map(f32::to_bits);
         for i in 0..x.len() {
-            if inv_mass[i] == 0.0 {
+            // A particle the step's cache lists no obstacle for, still
+            // within its margin, is near none (the particle pass's free
+            // particles): the broad phase for it found nothing.
+            if inv_mass[i] == 0.0 || self.tracks.free_drift2(i, x[i]).is_some() {
                 continue;
             }
             let before = bits(x[i]);
