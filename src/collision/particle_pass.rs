@@ -116,9 +116,10 @@ impl ParticlePass<'_> {
             // Nor, in a pass over the bodies alone, for a particle near
             // still obstacles only: `particle` passes over those (the laid
             // table's 4096 particles under a box, a body's substeps).
-            let free = match self.tracks.free_drift2(i, out.x[k]) {
-                None if self.skip_still => self.tracks.still_only_drift2(i, out.x[k]),
-                free => free,
+            let free = if self.skip_still {
+                self.tracks.still_only_drift2(i, out.x[k])
+            } else {
+                self.tracks.free_drift2(i, out.x[k])
             };
             if let Some(drift2) = free {
                 out.nearest[k] = NONE;

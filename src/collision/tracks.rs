@@ -309,24 +309,26 @@ impl ObstacleTracks {
     /// candidates cached, or out of the margin).
     #[inline]
     pub(super) fn free_drift2(&self, i: usize, point: Vector) -> Option<f32> {
-        let anchor = self.anchor(i)?;
-        let from_anchor = point - anchor;
         let listed = self.cache_start.get(i..i + 2).is_none_or(|c| c[0] != c[1]);
-        if listed || from_anchor.abs().max_element() > self.cache_margin {
-            return None;
-        }
-        Some(from_anchor.length_squared())
+        self.drift2_unless(listed, i, point)
     }
 
     /// As [`Self::free_drift2`], for a particle whose cached candidates are
-    /// all still obstacles (none that moves or is a dynamic body): a pass
-    /// over the bodies alone passes it by as it does a free one.
+    /// all still obstacles (none that moves or is a dynamic body, or none
+    /// at all): a pass over the bodies alone passes it by as it does a
+    /// free one.
     #[inline]
     pub(super) fn still_only_drift2(&self, i: usize, point: Vector) -> Option<f32> {
-        let anchor = self.anchor(i)?;
-        let from_anchor = point - anchor;
         let near_moving = self.near_moving.get(i).is_none_or(|&m| m);
-        if near_moving || from_anchor.abs().max_element() > self.cache_margin {
+        self.drift2_unless(near_moving, i, point)
+    }
+
+    /// Particle `i`'s squared drift (m²) from its anchor to `point`,
+    /// unless `near` or it left the margin (or there is no cache).
+    #[inline(always)]
+    fn drift2_unless(&self, near: bool, i: usize, point: Vector) -> Option<f32> {
+        let from_anchor = point - self.anchor(i)?;
+        if near || from_anchor.abs().max_element() > self.cache_margin {
             return None;
         }
         Some(from_anchor.length_squared())

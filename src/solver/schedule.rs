@@ -149,7 +149,7 @@ impl ClothSolver {
         let longest_rest = if edges { longest_rest(ws, cloth) } else { 0.0 };
         let reach = cloth.params.thickness + longest_rest;
         ws.collision.begin_step(obstacles, dt, reach, n);
-        // The relaxed limit's scratch made for the cloth now, so that the
+        // The stretch limit's scratch made for the cloth now, so that the
         // first step whose contacts call it allocates nothing.
         if cloth.material.stretch_limit_factor().is_finite() {
             ws.limit_scratch.prepare(&cloth.topology.springs, n);

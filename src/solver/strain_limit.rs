@@ -141,11 +141,12 @@ impl DirtySprings {
     /// every spring, unless `carry` (then those the last call left, and
     /// those at the particles noted since) for the same springs.
     fn begin(&mut self, springs: &Springs, particles: usize, carry: bool) {
-        self.at.build(springs, particles);
         let count = springs.count(SpringKind::Stretch);
         if carry && self.of == (count, particles) {
+            // The springs at each particle too: the last call's cloth.
             return;
         }
+        self.at.build(springs, particles);
         self.of = (count, particles);
         let words = count.div_ceil(64);
         self.now.clear();
