@@ -2358,7 +2358,6 @@ mod tests {
     /// for springs near their limit. When the passes could not bring every
     /// spring within it, no room is claimed and the limit is unsettled.
     #[test]
-    #[test]
     fn the_stretch_limit_reports_the_least_room_left() {
         let cloth = ClothBuilder::new(13, 9).build().unwrap();
         let springs = cloth.springs();
