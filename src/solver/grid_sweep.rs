@@ -518,12 +518,12 @@ impl GridPlan {
         self.pin_support.pinned()
     }
 
-    /// The marks' base for a new call of the stretch limit: pass `k` of it
-    /// marks a lane `base + k`, above any mark of an earlier call, so the
-    /// marks need no fill a call (a fill of every lane a substep, on the
-    /// calling thread, whose lines the other thread then fetched back).
-    /// Filled only when the base would overflow.
-    /// Also whether the marks were filled for it.
+    /// The marks' base for a new call of the stretch limit, and whether the
+    /// marks were filled for it: pass `k` of the call marks a lane
+    /// `base + k`, above any mark of an earlier call, so the marks need no
+    /// fill a call (a fill of every lane a substep, on the calling thread,
+    /// whose lines the other thread then fetched back). Filled only when
+    /// the base would overflow.
     fn next_limit_base(&mut self) -> (u32, bool) {
         let filled = self.limit_base > u32::MAX - 2 * LIMIT_PASSES;
         if filled {
