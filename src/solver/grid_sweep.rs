@@ -2339,10 +2339,6 @@ mod tests {
                         again.room.map(f32::to_bits)
                     )
                 );
-                let bits = |lanes: &mut Lanes| {
-                    let [x, y, z, ..] = lanes.arrays_mut();
-                    [x, y, z].map(|v| v.iter().map(|c| c.to_bits()).collect::<Vec<_>>())
-                };
                 assert_eq!(bits(&mut lanes), bits(&mut lanes_again));
                 unsettled += u32::from(fresh.unsettled);
                 settled += u32::from(fresh.room.is_some());
