@@ -136,8 +136,9 @@ pub(crate) struct GridPlan {
     /// The bands, then the boundaries between them: each phase's regions
     /// share no lane, in ascending lane order.
     phases: [Vec<Region>; 2],
-    /// Per phase and pass: its springs (a phase with few runs on one thread).
-    work: [[usize; 6]; 2],
+    /// Per phase and pass, then long spans ([`LONG_RUNS`]): its springs
+    /// (a phase with few runs on one thread).
+    work: [[usize; 8]; 2],
     /// Which bands and boundaries a handout of both phases has run
     /// ([`bands_and_boundaries`]).
     flags: PhaseFlags,
@@ -151,6 +152,16 @@ pub(crate) struct GridPlan {
     /// stretch springs at rest that the bend spring leaving each lane spans
     /// (0 where none leaves). The stretch limit holds these pairs too.
     span: [Vec<f32>; 2],
+    /// Per direction (rows, then columns): the length (m) at rest of the
+    /// stretch springs a long span from each lane takes ([`LONG_SPAN`];
+    /// ∞ where one of them is missing, 0 where no span leaves the lane).
+    /// The stretch limit holds these after an unsettled call.
+    long_span: [Vec<f32>; 2],
+    /// The long spans' families (rows, then columns): from particle
+    /// `(r, c)` to `(r + dr, c + dc)`; their runs follow the passes' in
+    /// each region's `runs` ([`LONG_RUNS`]; read by the tests).
+    #[cfg_attr(not(test), allow(dead_code))]
+    long_steps: [(usize, isize); 2],
     /// The longest rest length of a stretch spring (m).
     longest_stretch: f32,
     /// Per lane: the last pass of the stretch limit that moved it (as
@@ -159,6 +170,8 @@ pub(crate) struct GridPlan {
     /// The marks' value before the last call's first pass: a call's marks
     /// run above every earlier call's ([`GridPlan::next_limit_base`]).
     limit_base: u32,
+    /// The last call of the stretch limit this step ended unsettled.
+    limit_unsettled: bool,
     /// A torn grid's springs that no run holds (none for a whole grid).
     leftover: LeftoverSprings,
     /// The plan is a torn grid's ([`GridPlan::torn`]).
@@ -172,8 +185,15 @@ pub(crate) struct GridPlan {
 const PARALLEL_MIN_SPRINGS: usize = 2048;
 
 /// Rows a band has at least: more bands would leave too little work to a
-/// thread, and a boundary's rows (two either side) must not reach the next.
+/// thread, and a boundary's rows (as many either side as the longest
+/// family spans: [`LONG_SPAN`]) must not reach the next.
 const BAND_ROWS: usize = 16;
+
+const _: () = assert!(2 * LONG_SPAN <= BAND_ROWS, "boundaries apart");
+
+/// Where the long spans' runs are in a region's `runs`: after the six
+/// passes', along rows, then along columns.
+const LONG_RUNS: [usize; 2] = [6, 7];
 
 /// Part of the grid whose springs are swept together: the lanes of some
 /// rows and, for each pass, the runs of its springs that lie within them.
@@ -181,7 +201,8 @@ const BAND_ROWS: usize = 16;
 struct Region {
     /// Lanes this region's springs touch, and only they.
     lanes: std::ops::Range<usize>,
-    /// Per pass: its runs here, lanes counted from `lanes.start`, in sweep order.
+    /// Per pass, then per long span ([`LONG_RUNS`]): its runs here, lanes
+    /// counted from `lanes.start`, in sweep order.
     runs: Vec<Vec<Segment>>,
 }
 
@@ -283,11 +304,12 @@ fn apart(a: u32, b: u32, len: u32) -> bool {
 fn regions(
     (cols, blocks): (usize, usize),
     lanes: LaneGrid,
-    families: &[(usize, isize, usize); 6],
+    families: &[(usize, isize, usize)],
 ) -> [Vec<Region>; 2] {
     let rows = lanes.grid.rows;
     let bands = (rows / BAND_ROWS).max(1);
     let cut = |k: usize| k * rows / bands;
+    let reach = families.iter().map(|f| f.0).max().unwrap_or(0);
     let region = |first: usize, end: usize, keep: &dyn Fn(usize, usize) -> bool| Region {
         lanes: first * cols..end * cols,
         runs: families
@@ -309,7 +331,9 @@ fn regions(
     let crossing = (1..bands)
         .map(|k| {
             let t = cut(k);
-            region(t - 2, (t + 2).min(rows), &|r, dr| r < t && r + dr >= t)
+            region(t - reach, (t + reach).min(rows), &|r, dr| {
+                r < t && r + dr >= t
+            })
         })
         .collect();
     [inside, crossing]
@@ -450,11 +474,17 @@ impl GridPlan {
             return None;
         }
         leftover.finish();
-        let mut phases = regions(
-            (cols, blocks),
-            lanes,
-            &families.map(|(_, dr, dc, p)| (dr, dc, p)),
-        );
+        let along_rows = long_span_along_rows(blocks);
+        let long_steps = [(0, along_rows as isize), (LONG_SPAN, 0)];
+        // The runs of the passes, then of the long spans (rows taken
+        // `2 LONG_SPAN` apart, so that two spans share no particle).
+        let run_families: Vec<(usize, isize, usize)> = families
+            .iter()
+            .map(|&(_, dr, dc, p)| (dr, dc, p))
+            .chain(long_steps.map(|(dr, dc)| (dr, dc, 2 * LONG_SPAN)))
+            .collect();
+        debug_assert!(LONG_RUNS.iter().all(|&p| p >= families.len()));
+        let mut phases = regions((cols, blocks), lanes, &run_families);
         if let Some(last) = phases[0].last_mut() {
             // The new particles' lanes in the last band, so that each
             // band's loop over its particles takes them too.
@@ -483,6 +513,32 @@ impl GridPlan {
             }
             span
         });
+        // From (r, c) the stretch springs leaving (r, c), (r, c + 1), ...
+        // along rows; likewise along columns. A span over a missing spring
+        // (torn, or across stacked pieces) holds nothing.
+        let long_span = [0, 1].map(|family| {
+            let (dr, dc) = long_steps[family];
+            let (count, next) = if family == 0 {
+                (dc as usize, 1)
+            } else {
+                (dr, cols)
+            };
+            let stretch = rest.get(family);
+            let mut span = vec![0.0; all];
+            for i in 0..n {
+                let (r, c) = (i / cols, i % cols);
+                if r + dr >= rows || c + dc as usize >= cols {
+                    continue;
+                }
+                let parts = (0..count).map(|k| stretch[lane[i + k * next] as usize]);
+                span[lane[i] as usize] = if parts.clone().all(|l| l > 0.0) {
+                    parts.sum()
+                } else {
+                    f32::INFINITY
+                };
+            }
+            span
+        });
         Some(GridPlan {
             shape: (cols, rows),
             lane,
@@ -493,11 +549,14 @@ impl GridPlan {
             lambda: Staggered::new(6, all, LAMBDA_SLOT),
             rest,
             span,
+            long_span,
+            long_steps,
             longest_stretch,
             leftover,
             torn: torn.is_some(),
             limit_moved: vec![0; all],
             limit_base: 0,
+            limit_unsettled: false,
             pin_support: PinSupport::default(),
         })
     }
@@ -532,6 +591,11 @@ impl GridPlan {
         }
         self.limit_base += LIMIT_PASSES;
         (self.limit_base, filled)
+    }
+
+    /// Starts a step's calls of the stretch limit as if the last ended settled.
+    pub(crate) fn forget_unsettled(&mut self) {
+        self.limit_unsettled = false;
     }
 
     /// The plan is a torn grid's ([`GridPlan::torn`]): its runs miss
@@ -1134,6 +1198,35 @@ impl Tally {
 /// 256 (BENCHMARKS.md, fourteenth session).
 pub(crate) const LIMIT_PASSES: u32 = 8;
 
+/// How many stretch springs along a row or a column the stretch limit's
+/// long spans take: after a call left the limit unsettled (a landing's
+/// shock at `N = 256`), the next calls hold these spans in place of the
+/// pairs, and a correction crosses the cloth in fewer passes. No span is
+/// held to less than its springs at their limits reach. Measured,
+/// instructions (callgrind, one thread) of `bench` at `N = 256` over 40
+/// frames against the pairs in every call: 40.46 → 38.10 G (−5.8%; the
+/// limit's kernel 12.95 → 12.70 G, the collision stage's `move_out` after
+/// the last substep 1.67 → 0.62 G, the regions' checks for moved lanes,
+/// over wider boundaries, 1.16 → 1.75 G); at `N = 128` +0.2%, the
+/// `hammock` +0.9%, `pins` and `box` +0.1% or less; peak stretch 4.51%
+/// in each. Probes whose row runs still joined lanes of one block (see
+/// [`long_span_along_rows`]), so indicative only: spans of eight in every
+/// call in place of the pairs −10% at `N = 256` but +5% on the `hammock`
+/// and at `N = 128`; spans of four −7% and +5%; spans and pairs both in
+/// every call +18% at `N = 256`.
+const LONG_SPAN: usize = 8;
+
+/// How many stretch springs a long span takes along a row stored in
+/// `blocks` blocks: [`LONG_SPAN`], or one fewer where that many would
+/// join two lanes of one block (a run's two ends would overlap).
+fn long_span_along_rows(blocks: usize) -> usize {
+    if LONG_SPAN.is_multiple_of(blocks) {
+        LONG_SPAN - 1
+    } else {
+        LONG_SPAN
+    }
+}
+
 /// How far past its limit a pass of the grid's stretch limit shortens a
 /// spring: 1.9 times its excess, so 0.9 of it below the limit
 /// (successive over-relaxation of the passes' Gauss–Seidel). A pass then
@@ -1187,13 +1280,20 @@ fn limit_stretch_with(
     // the passes. No pair is held to less than its two springs at their
     // limits can reach, so the pairs only hasten what the springs' own
     // limit would come to (a folded pair is shorter and left alone).
+    // After an unsettled call, the long spans in place of the pairs
+    // ([`LONG_SPAN`]), which reach farther a pass.
+    let spans = if plan.limit_unsettled {
+        [0, 1].map(|d| (LONG_RUNS[d], &plan.long_span[d][..]))
+    } else {
+        [(4, &plan.span[0][..]), (5, &plan.span[1][..])]
+    };
     let limits: [(usize, &[f32]); 4] = [
-        (4, &plan.span[0]),
-        (5, &plan.span[1]),
+        spans[0],
+        spans[1],
         (0, plan.rest.get(0)),
         (1, plan.rest.get(1)),
     ];
-    debug_assert!(limits.iter().all(|&(p, _)| {
+    debug_assert!(limits.iter().filter(|&&(p, _)| p < 6).all(|&(p, _)| {
         let kind = plan.passes[p].kind;
         kind == if p < 4 {
             SpringKind::Stretch
@@ -1292,6 +1392,7 @@ fn limit_stretch_with(
             } else {
                 squares / (2.0 * factor * plan.longest_stretch)
             };
+            plan.limit_unsettled = false;
             return LimitOutcome {
                 shortened,
                 room: Some(room),
@@ -1299,6 +1400,7 @@ fn limit_stretch_with(
             };
         }
     }
+    plan.limit_unsettled = unsettled;
     LimitOutcome {
         shortened,
         room: None,
@@ -2030,24 +2132,36 @@ mod tests {
 
     /// The stretch limit as it was written first, one spring at a time.
     fn limit_one_by_one(plan: &GridPlan, lanes: &mut Lanes, factor: f32) -> u32 {
-        limit_one_by_one_with(plan, lanes, factor, true)
+        limit_one_by_one_with(plan, lanes, factor, Spans::Pairs)
     }
 
-    /// [`limit_one_by_one`], with the pairs of stretch springs or without.
-    fn limit_one_by_one_with(plan: &GridPlan, lanes: &mut Lanes, factor: f32, pairs: bool) -> u32 {
+    /// What the reference limit holds besides the stretch springs.
+    #[derive(Clone, Copy, PartialEq)]
+    enum Spans {
+        None,
+        Pairs,
+        Long,
+    }
+
+    /// [`limit_one_by_one`], with the pairs of stretch springs, the long
+    /// spans or neither.
+    fn limit_one_by_one_with(plan: &GridPlan, lanes: &mut Lanes, factor: f32, spans: Spans) -> u32 {
         let [x, y, z, _, _, _, w] = lanes.arrays_mut();
         let mut over = 0;
         for number in 1..=LIMIT_PASSES {
             let mut this_pass = 0;
-            // The pairs along rows and columns (after the first pass), then
-            // the stretch springs, region by region.
-            let limits: &[(usize, &[f32])] = &[
-                (4, &plan.span[0]),
-                (5, &plan.span[1]),
-                (0, plan.rest.get(0)),
-                (1, plan.rest.get(1)),
-            ];
-            let limits = if number == 1 || !pairs {
+            // The pairs or long spans along rows and columns (after the
+            // first pass), then the stretch springs, region by region.
+            let [rows, cols]: [(usize, &[f32]); 2] = match spans {
+                Spans::Long => [
+                    (LONG_RUNS[0], &plan.long_span[0]),
+                    (LONG_RUNS[1], &plan.long_span[1]),
+                ],
+                _ => [(4, &plan.span[0]), (5, &plan.span[1])],
+            };
+            let limits: &[(usize, &[f32])] =
+                &[rows, cols, (0, plan.rest.get(0)), (1, plan.rest.get(1))];
+            let limits = if number == 1 || spans == Spans::None {
                 &limits[2..]
             } else {
                 limits
@@ -2117,6 +2231,55 @@ mod tests {
         }
     }
 
+    /// After an unsettled call the limit holds the long spans in place of
+    /// the pairs, with the bits of one spring at a time, and their lengths
+    /// are those of the stretch springs they take.
+    #[test]
+    fn after_an_unsettled_call_the_limit_holds_the_long_spans() {
+        let stretched = || {
+            let (mut plan, mut lanes) = grid_lanes((21, 2 * BAND_ROWS + 5), |i, p| {
+                let j = (i as f32 * 0.37).sin() * 0.01;
+                [p.x + j, p.y - j, p.z + 0.5 * j]
+            });
+            plan.limit_unsettled = true;
+            for v in lanes.arrays_mut().into_iter().step_by(2).take(2) {
+                v.iter_mut().for_each(|v| *v *= 1.08);
+            }
+            (plan, lanes)
+        };
+        let (plan, mut reference) = stretched();
+        let (cols, rows) = plan.shape;
+        let (dr, dc) = (plan.long_steps[1].0, plan.long_steps[0].1 as usize);
+        assert!(dr == LONG_SPAN && (dc == LONG_SPAN || dc == LONG_SPAN - 1));
+        // The grid is spaced evenly: a span is its springs' rest lengths.
+        let (dx, dz) = (1.0 / (cols - 1) as f32, 1.0 / (rows - 1) as f32);
+        for i in 0..cols * rows {
+            let (r, c, lane) = (i / cols, i % cols, plan.lane(i));
+            let along_row = if c + dc < cols { dc as f32 * dx } else { 0.0 };
+            let along_column = if r + dr < rows { dr as f32 * dz } else { 0.0 };
+            assert!((plan.long_span[0][lane] - along_row).abs() < 1e-5);
+            assert!((plan.long_span[1][lane] - along_column).abs() < 1e-5);
+        }
+        let shortened = limit_one_by_one_with(&plan, &mut reference, 1.02, Spans::Long);
+        let (plan_pairs, mut pairs) = stretched();
+        limit_one_by_one_with(&plan_pairs, &mut pairs, 1.02, Spans::Pairs);
+        assert_ne!(bits(&mut pairs), bits(&mut reference), "the spans held");
+        assert!(shortened > 50, "only {shortened} springs over the limit");
+        for simd in [false, simd_available()] {
+            let (mut plan, mut lanes) = stretched();
+            let outcome = limit_stretch_with(
+                &mut plan,
+                &mut lanes,
+                (1.02, None),
+                Team::ALONE,
+                (simd, false),
+            );
+            assert_eq!(outcome.shortened, shortened);
+            assert_eq!(bits(&mut lanes), bits(&mut reference));
+            assert_eq!(plan.limit_unsettled, outcome.unsettled);
+        }
+    }
+
     /// A cloth of several bands of rows stretched at one end only: after
     /// the first pass the limit passes over the regions none of whose lanes
     /// moved, and still gives the bits of every spring looked at in every
@@ -2162,6 +2325,9 @@ mod tests {
                 if let Some(base) = base {
                     plan.limit_base = base;
                 }
+                // As a step's first call: with the pairs, whatever the
+                // call before ended with.
+                plan.forget_unsettled();
                 let outcome = limit_stretch_with(
                     &mut plan,
                     &mut again,
@@ -2197,14 +2363,14 @@ mod tests {
         }
         // The worst stretch of a free cloth stretched 40% along x and z,
         // after the limit of 1% with the pairs and without.
-        let worst = |pairs: bool| {
+        let worst = |spans: Spans| {
             let (plan, mut lanes) = setup();
             let [x, _, z, .., w] = lanes.arrays_mut();
             for v in x.iter_mut().chain(z.iter_mut()) {
                 *v *= 1.4;
             }
             w.fill(100.0);
-            limit_one_by_one_with(&plan, &mut lanes, 1.01, pairs);
+            limit_one_by_one_with(&plan, &mut lanes, 1.01, spans);
             let [x, y, z, ..] = lanes.arrays_mut();
             let springs = cloth_springs();
             springs
@@ -2219,7 +2385,7 @@ mod tests {
                 })
                 .fold(0.0, f32::max)
         };
-        let (with, without) = (worst(true), worst(false));
+        let (with, without) = (worst(Spans::Pairs), worst(Spans::None));
         assert!(
             without > 1.02,
             "{without}: the test needs a limit not reached"
@@ -2603,6 +2769,40 @@ mod tests {
                 }
             }
             assert_eq!(springs, cloth.springs().len(), "{cols}x{rows}");
+            // The long spans likewise: each once, none across pieces, no
+            // particle twice in a run, every one with its length.
+            let r = lanes.piece_rows;
+            for (d, &(dr, dc)) in plan.long_steps.iter().enumerate() {
+                let p = LONG_RUNS[d];
+                let mut seen = vec![false; n];
+                for region in plan.phases.iter().flatten() {
+                    let base = region.lanes.start;
+                    for seg in &region.runs[p] {
+                        let mut in_run = std::collections::HashSet::new();
+                        for t in 0..seg.len as usize {
+                            let (la, lb) = (seg.a as usize + t, seg.b as usize + t);
+                            assert!(la.max(lb) < region.lanes.len(), "a run leaves its region");
+                            let (la, lb) = (la + base, lb + base);
+                            let (a, b) = (particle[la], particle[lb]);
+                            assert_eq!(b / cols, a / cols + dr, "{cols}x{rows}");
+                            assert!(lanes.same_piece(a / cols, b / cols), "across pieces");
+                            assert_eq!((b % cols) as isize, (a % cols) as isize + dc);
+                            let span = plan.long_span[d][la];
+                            assert!(span > 0.0 && span.is_finite(), "{cols}x{rows}: {span}");
+                            assert!(!std::mem::replace(&mut seen[la], true), "a span twice");
+                            assert!(in_run.insert(a) && in_run.insert(b), "a particle twice");
+                        }
+                    }
+                }
+                let dc = dc as usize;
+                let count = if d == 0 {
+                    cols.saturating_sub(dc) * rows
+                } else {
+                    cols * r.saturating_sub(dr) * (rows / r)
+                };
+                let held = seen.iter().filter(|&&s| s).count();
+                assert_eq!(held, count, "{cols}x{rows}: long spans {d}");
+            }
         }
     }
 

@@ -348,6 +348,12 @@ pub(crate) fn step(
             // The limit puts each lane it moves back onto its cuboids'
             // planes at once (`hold_limit`).
             let cuboids = contacts.held_planes();
+            // The limit holds its long spans after an unsettled call of
+            // the same step only: a step's bits do not hang on the step
+            // before (a snapshot restored between steps computes the same).
+            if sub.ctx.substep == 0 {
+                plan.forget_unsettled();
+            }
             let room = hold_limit(plan, l, (model.stretch_limit, cuboids), team);
             let room = hold_planes((planes, lane), plan, l, (model.stretch_limit, room), team);
             // At the step's last substep the lanes' contacts win over the
