@@ -2130,6 +2130,17 @@ mod tests {
         assert_ne!(bits(&mut a), bits(&mut fresh));
     }
 
+    /// A call of the stretch limit with `factor` and no planes, on one
+    /// thread, with the AVX2 kernel only when `simd`.
+    fn limit_with_simd(
+        plan: &mut GridPlan,
+        lanes: &mut Lanes,
+        factor: f32,
+        simd: bool,
+    ) -> LimitOutcome {
+        limit_stretch_with(plan, lanes, (factor, None), Team::ALONE, (simd, false))
+    }
+
     /// The stretch limit as it was written first, one spring at a time.
     fn limit_one_by_one(plan: &GridPlan, lanes: &mut Lanes, factor: f32) -> u32 {
         limit_one_by_one_with(plan, lanes, factor, Spans::Pairs)
@@ -2218,14 +2229,7 @@ mod tests {
         assert!(shortened > 50, "only {shortened} springs over the limit");
         for simd in [false, simd_available()] {
             let (mut plan, mut lanes) = stretched();
-            let n = limit_stretch_with(
-                &mut plan,
-                &mut lanes,
-                (1.02, None),
-                Team::ALONE,
-                (simd, false),
-            )
-            .shortened;
+            let n = limit_with_simd(&mut plan, &mut lanes, 1.02, simd).shortened;
             assert_eq!(n, shortened);
             assert_eq!(bits(&mut lanes), bits(&mut reference));
         }
@@ -2267,13 +2271,7 @@ mod tests {
         assert!(shortened > 50, "only {shortened} springs over the limit");
         for simd in [false, simd_available()] {
             let (mut plan, mut lanes) = stretched();
-            let outcome = limit_stretch_with(
-                &mut plan,
-                &mut lanes,
-                (1.02, None),
-                Team::ALONE,
-                (simd, false),
-            );
+            let outcome = limit_with_simd(&mut plan, &mut lanes, 1.02, simd);
             assert_eq!(outcome.shortened, shortened);
             assert_eq!(bits(&mut lanes), bits(&mut reference));
             assert_eq!(plan.limit_unsettled, outcome.unsettled);
@@ -2301,13 +2299,7 @@ mod tests {
         assert!(shortened > 20, "only {shortened} springs over the limit");
         for simd in [false, simd_available()] {
             let (mut plan, mut lanes) = stretched();
-            let outcome = limit_stretch_with(
-                &mut plan,
-                &mut lanes,
-                (1.02, None),
-                Team::ALONE,
-                (simd, false),
-            );
+            let outcome = limit_with_simd(&mut plan, &mut lanes, 1.02, simd);
             assert_eq!(outcome.shortened, shortened);
             assert_eq!(bits(&mut lanes), bits(&mut reference));
             // Some region was passed over whole in the later passes: its
@@ -2328,13 +2320,7 @@ mod tests {
                 // As a step's first call: with the pairs, whatever the
                 // call before ended with.
                 plan.forget_unsettled();
-                let outcome = limit_stretch_with(
-                    &mut plan,
-                    &mut again,
-                    (1.02, None),
-                    Team::ALONE,
-                    (simd, false),
-                );
+                let outcome = limit_with_simd(&mut plan, &mut again, 1.02, simd);
                 assert_eq!(outcome.shortened, shortened);
                 assert_eq!(bits(&mut again), bits(&mut reference));
             }
@@ -2545,13 +2531,7 @@ mod tests {
         for simd in [false, simd_available()] {
             // Within a generous limit.
             let (mut plan, mut lanes) = setup();
-            let limited = limit_stretch_with(
-                &mut plan,
-                &mut lanes,
-                (1.3, None),
-                Team::ALONE,
-                (simd, false),
-            );
+            let limited = limit_with_simd(&mut plan, &mut lanes, 1.3, simd);
             let LimitOutcome {
                 shortened: n, room, ..
             } = limited;
@@ -2565,13 +2545,7 @@ mod tests {
             // only at the springs still moving; a spring was shortened to its
             // limit, so none has room.
             let (mut plan, mut lanes) = setup();
-            let limited = limit_stretch_with(
-                &mut plan,
-                &mut lanes,
-                (1.05, None),
-                Team::ALONE,
-                (simd, false),
-            );
+            let limited = limit_with_simd(&mut plan, &mut lanes, 1.05, simd);
             let LimitOutcome {
                 shortened: n,
                 room,
@@ -2588,13 +2562,7 @@ mod tests {
             for v in lanes.arrays_mut().into_iter().take(3) {
                 v.iter_mut().for_each(|v| *v *= 1.3);
             }
-            let limited = limit_stretch_with(
-                &mut plan,
-                &mut lanes,
-                (1.01, None),
-                Team::ALONE,
-                (simd, false),
-            );
+            let limited = limit_with_simd(&mut plan, &mut lanes, 1.01, simd);
             let LimitOutcome {
                 shortened: n,
                 room,
@@ -2730,6 +2698,29 @@ mod tests {
                 "{cols}x{rows}: lanes not a permutation"
             );
             assert_eq!(plan.phases[0].len(), (rows / BAND_ROWS).max(1));
+            // The lanes of a run's first ends, each spring checked: within
+            // the region, of the family `(dr, dc)`, within one piece, no
+            // particle twice in the run.
+            let run_lanes = |seg: &Segment, region: &Region, (dr, dc): (usize, isize)| {
+                let mut in_run = std::collections::HashSet::new();
+                let base = region.lanes.start;
+                (0..seg.len as usize)
+                    .map(|t| {
+                        let (la, lb) = (seg.a as usize + t, seg.b as usize + t);
+                        assert!(la.max(lb) < region.lanes.len(), "a run leaves its region");
+                        let (la, lb) = (la + base, lb + base);
+                        let (a, b) = (particle[la], particle[lb]);
+                        assert_eq!(b / cols, a / cols + dr, "{cols}x{rows}");
+                        assert!(lanes.same_piece(a / cols, b / cols), "across pieces");
+                        assert_eq!((b % cols) as isize, (a % cols) as isize + dc);
+                        assert!(
+                            in_run.insert(a) && in_run.insert(b),
+                            "a particle twice in a run"
+                        );
+                        la
+                    })
+                    .collect::<Vec<_>>()
+            };
             let mut springs = 0;
             let mut seen_a = vec![vec![false; n]; plan.passes.len()];
             for phase in &plan.phases {
@@ -2738,18 +2729,9 @@ mod tests {
                     assert!(pair[0].lanes.end <= pair[1].lanes.start, "{cols}x{rows}");
                 }
                 for region in phase {
-                    let base = region.lanes.start;
                     for (p, pass) in plan.passes.iter().enumerate() {
                         for seg in &region.runs[p] {
-                            let mut in_run = std::collections::HashSet::new();
-                            for t in 0..seg.len as usize {
-                                let (la, lb) = (seg.a as usize + t, seg.b as usize + t);
-                                assert!(la.max(lb) < region.lanes.len(), "a run leaves its region");
-                                let (la, lb) = (la + base, lb + base);
-                                let (a, b) = (particle[la], particle[lb]);
-                                assert_eq!(b / cols, a / cols + pass.dr, "{cols}x{rows}");
-                                assert!(lanes.same_piece(a / cols, b / cols), "across pieces");
-                                assert_eq!((b % cols) as isize, (a % cols) as isize + pass.dc);
+                            for la in run_lanes(seg, region, (pass.dr, pass.dc)) {
                                 assert!(
                                     plan.rest.get(p)[la] > 0.0,
                                     "{cols}x{rows}: a run over a missing spring"
@@ -2757,10 +2739,6 @@ mod tests {
                                 assert!(
                                     !std::mem::replace(&mut seen_a[p][la], true),
                                     "a spring twice"
-                                );
-                                assert!(
-                                    in_run.insert(a) && in_run.insert(b),
-                                    "a particle twice in a run"
                                 );
                                 springs += 1;
                             }
@@ -2776,21 +2754,11 @@ mod tests {
                 let p = LONG_RUNS[d];
                 let mut seen = vec![false; n];
                 for region in plan.phases.iter().flatten() {
-                    let base = region.lanes.start;
                     for seg in &region.runs[p] {
-                        let mut in_run = std::collections::HashSet::new();
-                        for t in 0..seg.len as usize {
-                            let (la, lb) = (seg.a as usize + t, seg.b as usize + t);
-                            assert!(la.max(lb) < region.lanes.len(), "a run leaves its region");
-                            let (la, lb) = (la + base, lb + base);
-                            let (a, b) = (particle[la], particle[lb]);
-                            assert_eq!(b / cols, a / cols + dr, "{cols}x{rows}");
-                            assert!(lanes.same_piece(a / cols, b / cols), "across pieces");
-                            assert_eq!((b % cols) as isize, (a % cols) as isize + dc);
+                        for la in run_lanes(seg, region, (dr, dc)) {
                             let span = plan.long_span[d][la];
                             assert!(span > 0.0 && span.is_finite(), "{cols}x{rows}: {span}");
                             assert!(!std::mem::replace(&mut seen[la], true), "a span twice");
-                            assert!(in_run.insert(a) && in_run.insert(b), "a particle twice");
                         }
                     }
                 }
