@@ -201,6 +201,10 @@ const LONG_RUNS: [usize; 2] = [6, 7];
 struct Region {
     /// Lanes this region's springs touch, and only they.
     lanes: std::ops::Range<usize>,
+    /// The lanes the six passes' springs and the pairs touch, counted from
+    /// `lanes.start`: all of them in a band, but a boundary's long spans
+    /// reach [`LONG_SPAN`] rows either side and the rest two.
+    near: std::ops::Range<usize>,
     /// Per pass, then per long span ([`LONG_RUNS`]): its runs here, lanes
     /// counted from `lanes.start`, in sweep order.
     runs: Vec<Vec<Segment>>,
@@ -300,38 +304,48 @@ fn apart(a: u32, b: u32, len: u32) -> bool {
 
 /// The bands of rows and the boundaries between them, each with the runs
 /// of every family `(dr, dc, period)` that lie in it (a spring from one
-/// stacked piece into the next is none).
+/// stacked piece into the next is none); the first `near` families are
+/// the passes' ([`Region::near`]).
 fn regions(
     (cols, blocks): (usize, usize),
     lanes: LaneGrid,
-    families: &[(usize, isize, usize)],
+    (families, near): (&[(usize, isize, usize)], usize),
 ) -> [Vec<Region>; 2] {
     let rows = lanes.grid.rows;
     let bands = (rows / BAND_ROWS).max(1);
     let cut = |k: usize| k * rows / bands;
-    let reach = families.iter().map(|f| f.0).max().unwrap_or(0);
-    let region = |first: usize, end: usize, keep: &dyn Fn(usize, usize) -> bool| Region {
-        lanes: first * cols..end * cols,
-        runs: families
-            .iter()
-            .map(|&f| {
-                let keep = |r: usize| keep(r, f.0) && lanes.same_piece(r, r + f.0);
-                segments((cols, blocks), rows, f, first, keep)
-            })
-            .collect(),
+    let reach =
+        |families: &[(usize, isize, usize)]| families.iter().map(|f| f.0).max().unwrap_or(0);
+    let (reach, near_reach) = (reach(families), reach(&families[..near]));
+    // The rows `t - reach..t + reach` of the boundary at row `t` hold every
+    // spring crossing it (one starts at most `reach` rows above and ends
+    // less than `reach` below); those of the passes within `near_reach`.
+    let near_rows = |first: usize, end: usize, t: Option<usize>| match t {
+        Some(t) => (t - near_reach - first) * cols..((t + near_reach).min(end) - first) * cols,
+        None => 0..(end - first) * cols,
     };
+    let region =
+        |first: usize, end: usize, t: Option<usize>, keep: &dyn Fn(usize, usize) -> bool| Region {
+            lanes: first * cols..end * cols,
+            near: near_rows(first, end, t),
+            runs: families
+                .iter()
+                .map(|&f| {
+                    let keep = |r: usize| keep(r, f.0) && lanes.same_piece(r, r + f.0);
+                    segments((cols, blocks), rows, f, first, keep)
+                })
+                .collect(),
+        };
     let inside = (0..bands)
         .map(|k| {
             let (r0, r1) = (cut(k), cut(k + 1));
-            region(r0, r1, &|r, dr| r >= r0 && r + dr < r1)
+            region(r0, r1, None, &|r, dr| r >= r0 && r + dr < r1)
         })
         .collect();
-    // A spring crossing row boundary `t` starts at most two rows above it
-    // and ends at most one below.
     let crossing = (1..bands)
         .map(|k| {
             let t = cut(k);
-            region(t - reach, (t + reach).min(rows), &|r, dr| {
+            region(t - reach, (t + reach).min(rows), Some(t), &|r, dr| {
                 r < t && r + dr >= t
             })
         })
@@ -484,11 +498,12 @@ impl GridPlan {
             .chain(long_steps.map(|(dr, dc)| (dr, dc, 2 * LONG_SPAN)))
             .collect();
         debug_assert!(LONG_RUNS.iter().all(|&p| p >= families.len()));
-        let mut phases = regions((cols, blocks), lanes, &run_families);
+        let mut phases = regions((cols, blocks), lanes, (&run_families, families.len()));
         if let Some(last) = phases[0].last_mut() {
             // The new particles' lanes in the last band, so that each
             // band's loop over its particles takes them too.
             last.lanes.end = all;
+            last.near.end = last.lanes.len();
         }
         let work = std::array::from_fn(|phase| {
             std::array::from_fn(|p| {
@@ -1207,7 +1222,8 @@ pub(crate) const LIMIT_PASSES: u32 = 8;
 /// frames against the pairs in every call: 40.46 → 38.10 G (−5.8%; the
 /// limit's kernel 12.95 → 12.70 G, the collision stage's `move_out` after
 /// the last substep 1.67 → 0.62 G, the regions' checks for moved lanes,
-/// over wider boundaries, 1.16 → 1.75 G); at `N = 128` +0.2%, the
+/// over wider boundaries, 1.16 → 1.75 G; 37.91 G and 1.57 G with the
+/// pairs' calls watching only [`Region::near`]); at `N = 128` +0.2%, the
 /// `hammock` +0.9%, `pins` and `box` +0.1% or less; peak stretch 4.51%
 /// in each. Probes whose row runs still joined lanes of one block (see
 /// [`long_span_along_rows`]), so indicative only: spans of eight in every
@@ -1335,7 +1351,12 @@ fn limit_stretch_with(
             // this one: none of its springs is due (`LimitMarks::due`
             // would say so of each), and the region is passed over
             // whole. At rest most regions are, after the first pass.
-            if !all && !moved_since(moved, base + number - 1) {
+            let watched = if spans[0].0 == LONG_RUNS[0] {
+                &moved[..]
+            } else {
+                &moved[region.near.clone()]
+            };
+            if !all && !moved_since(watched, base + number - 1) {
                 return 0;
             }
             let mut tally = Tally::NONE;
@@ -2731,6 +2752,10 @@ mod tests {
                 for region in phase {
                     for (p, pass) in plan.passes.iter().enumerate() {
                         for seg in &region.runs[p] {
+                            // Within the lanes a limit with the pairs watches.
+                            let (a, b, len) = (seg.a as usize, seg.b as usize, seg.len as usize);
+                            assert!(region.near.start <= a.min(b), "{cols}x{rows}");
+                            assert!(a.max(b) + len <= region.near.end, "{cols}x{rows}");
                             for la in run_lanes(seg, region, (pass.dr, pass.dc)) {
                                 assert!(
                                     plan.rest.get(p)[la] > 0.0,
