@@ -1086,7 +1086,9 @@ fn sweep_region<const ZERO: bool, const KEPT: bool>(
 /// `factor` times the length the pair spans at rest: a coarser level,
 /// which carries a correction twice as far a pass and which the springs at
 /// their limits always satisfy (it never holds the cloth tighter than they
-/// do). Returns the springs shortened, and when the last pass
+/// do). After a call of the same step that ended unsettled, the spans of
+/// eight springs ([`LONG_SPAN`]) take the pairs' place: a coarser level
+/// still. Returns the springs shortened, and when the last pass
 /// found none to shorten, the room left: how much (m) any stretch spring
 /// may still lengthen before it reaches the limit (the collision stage then
 /// knows which springs it need not hold).
