@@ -314,9 +314,9 @@ fn regions(
     let rows = lanes.grid.rows;
     let bands = (rows / BAND_ROWS).max(1);
     let cut = |k: usize| k * rows / bands;
-    let reach =
+    let most_rows =
         |families: &[(usize, isize, usize)]| families.iter().map(|f| f.0).max().unwrap_or(0);
-    let (reach, near_reach) = (reach(families), reach(&families[..near]));
+    let (reach, near_reach) = (most_rows(families), most_rows(&families[..near]));
     // The rows `t - reach..t + reach` of the boundary at row `t` hold every
     // spring crossing it (one starts at most `reach` rows above and ends
     // less than `reach` below); those of the passes within `near_reach`.
@@ -497,7 +497,7 @@ impl GridPlan {
             .map(|&(_, dr, dc, p)| (dr, dc, p))
             .chain(long_steps.map(|(dr, dc)| (dr, dc, 2 * LONG_SPAN)))
             .collect();
-        debug_assert!(LONG_RUNS.iter().all(|&p| p >= families.len()));
+        debug_assert_eq!(LONG_RUNS, [families.len(), families.len() + 1]);
         let mut phases = regions((cols, blocks), lanes, (&run_families, families.len()));
         if let Some(last) = phases[0].last_mut() {
             // The new particles' lanes in the last band, so that each
@@ -1300,7 +1300,8 @@ fn limit_stretch_with(
     // limit would come to (a folded pair is shorter and left alone).
     // After an unsettled call, the long spans in place of the pairs
     // ([`LONG_SPAN`]), which reach farther a pass.
-    let spans = if plan.limit_unsettled {
+    let long = plan.limit_unsettled;
+    let spans = if long {
         [0, 1].map(|d| (LONG_RUNS[d], &plan.long_span[d][..]))
     } else {
         [(4, &plan.span[0][..]), (5, &plan.span[1][..])]
@@ -1353,7 +1354,7 @@ fn limit_stretch_with(
             // this one: none of its springs is due (`LimitMarks::due`
             // would say so of each), and the region is passed over
             // whole. At rest most regions are, after the first pass.
-            let watched = if spans[0].0 == LONG_RUNS[0] {
+            let watched = if long {
                 &moved[..]
             } else {
                 &moved[region.near.clone()]
