@@ -1,5 +1,5 @@
 //! Contacts with still balls, capsules, half-spaces and cuboids (a ball on
-//! a stand, a bar, a floor, a table) held inside the small-steps solver's
+//! a stand, a bar, a floor, a table), and with sliding ones, held inside the small-steps solver's
 //! substeps, in its grid lanes. The
 //! collision stage after a substep visits every particle near an obstacle
 //! through its general pass (candidates, exact contact, tracing, friction,
@@ -33,6 +33,17 @@
 //! ([`LaneContacts::keep_springs_off_cuboids`], `xpbd::CUBOID_EDGES_EVERY`);
 //! the stage ran every second substep for that before, and the state left
 //! the lanes for it (`box` 6.4 → 4.4 ms, bench, one thread).
+//!
+//! A body that moves without turning and is not dynamic (a kinematic bar,
+//! ball or platform on its path) is held too, if made of balls, capsules,
+//! half-spaces and cuboids: where it is at the substep's end, as the
+//! collision stage takes it, with a lane's slide for friction taken
+//! relative to the surface's move and a cuboid's plane from where the lane
+//! started relative to it ([`lane_held`]). The state then stays in the
+//! lanes among such bodies too: the `tear`, whose sheet hangs from two
+//! sliding bars, ran the collision stage after each of its 40 substeps,
+//! and its frame went from 6.6–7.3 to 4.1–5.3 ms; the `curtain`'s from
+//! 1.7 to 1.2 ms.
 
 use crate::collision::{chords_clear_ball, Obstacle, EDGE_SAMPLES};
 use crate::math::{simd_available, Pose, Vector};
@@ -126,6 +137,9 @@ struct StillCuboid {
 pub(crate) struct LaneContacts {
     shapes: Vec<StillShape>,
     friction: Vec<f32>,
+    /// Per shape, how far (m) its surface moves over the substep (zero
+    /// for a still one).
+    shifts: Vec<Vector>,
     depth: Vec<f32>,
     touch: Vec<u32>,
     /// Per cuboid or other convex shape, per lane: the plane that holds
@@ -151,6 +165,30 @@ pub(crate) struct LaneContacts {
 /// without an inside or a heightfield, or a compound of such parts.
 fn held_shape(o: &Obstacle) -> bool {
     pieces(&*o.shape).all(|(_, _, shape)| shape.is_convex() || is_held_mesh(shape))
+}
+
+/// Whether the lanes may hold obstacle `o` over a substep: a still one of
+/// a shape they take ([`held_shape`]), or one that moves without turning
+/// and is not a dynamic body (a kinematic bar, ball or platform sliding
+/// along its path) made of balls, capsules, half-spaces and cuboids, held
+/// where it is at the substep's end. Friction then takes a lane's slide
+/// relative to the surface's move over the substep, and a cuboid's plane
+/// for a lane is taken from where the lane started relative to it.
+/// (A turning body moves each point of its surface differently, and a
+/// convex hull's or mesh's planes come from lists made for one pose: the
+/// collision stage keeps those.)
+fn lane_held(o: &Obstacle) -> bool {
+    if o.is_still() {
+        return held_shape(o);
+    }
+    o.body.is_none()
+        && o.angvel == Vector::ZERO
+        && pieces(&*o.shape).all(|(_, _, shape)| {
+            shape.as_ball().is_some()
+                || shape.as_capsule().is_some()
+                || shape.as_halfspace().is_some()
+                || shape.as_cuboid().is_some()
+        })
 }
 
 /// Which obstacles the lanes hold in a substep ([`LaneContacts::begin_holding`]).
@@ -183,38 +221,45 @@ fn pieces(shape: &dyn Shape) -> impl Iterator<Item = (Option<usize>, Pose, &dyn 
 
 impl LaneContacts {
     /// Whether every obstacle is one the lanes may hold, whatever the
-    /// motion (none counts: nothing to hold): still (no rapier body, no
-    /// velocity), and a ball, a capsule, a half-space, a cuboid or another
-    /// shape parry knows to be convex (a cylinder, a cone, a convex hull),
-    /// a triangle mesh without an inside or a heightfield (`lane_mesh.rs`),
-    /// or a compound of such parts (a table built of a top and legs, a
-    /// convex decomposition); not an oriented mesh.
+    /// motion (none counts: nothing to hold) ([`lane_held`]): still (no
+    /// rapier body, no velocity), and a ball, a capsule, a half-space, a
+    /// cuboid or another shape parry knows to be convex (a cylinder, a
+    /// cone, a convex hull), a triangle mesh without an inside or a
+    /// heightfield (`lane_mesh.rs`), or a compound of such parts (a table
+    /// built of a top and legs, a convex decomposition), not an oriented
+    /// mesh; or moving without turning, not a dynamic body, and made of
+    /// balls, capsules, half-spaces and cuboids.
     pub fn may_hold(obstacles: &[Obstacle]) -> bool {
-        obstacles.iter().all(|o| o.is_still() && held_shape(o))
+        obstacles.iter().all(lane_held)
     }
 
     /// Whether the lanes hold the contacts of every one of `obstacles`
-    /// (and there is one) for a substep in which no particle moves
-    /// further than `motion` (m): each is still (no rapier body, no
-    /// velocity) and a half-space, or a ball or capsule of a radius or a
-    /// cuboid of half extents over [`BALL_MOTIONS`] times `motion` (a particle is
+    /// (and there is one) for a substep of `h` seconds in which no
+    /// particle moves further than `motion` (m): each is one they may hold
+    /// ([`Self::may_hold`]) and a half-space, or a ball or capsule of a
+    /// radius or a cuboid of half extents over [`BALL_MOTIONS`] times
+    /// `motion` and the obstacle's own move in the substep (a particle is
     /// put back through the nearest face, which must be the one it came
     /// in by), or another convex shape whose own box's half extents are
     /// (a triangle, flat, is not held), or a mesh or heightfield whatever
     /// its size; a compound when each of its parts is. The collision
     /// stage then need not run after a substep but the last.
-    pub fn holds(obstacles: &[Obstacle], motion: f32) -> bool {
-        Self::holds_each(obstacles.iter(), motion)
+    pub fn holds(obstacles: &[Obstacle], motion: f32, h: f32) -> bool {
+        Self::holds_each(obstacles.iter(), motion, h)
     }
 
     /// [`Self::holds`] over `obstacles` as an iterator.
-    fn holds_each<'a>(obstacles: impl Iterator<Item = &'a Obstacle> + Clone, motion: f32) -> bool {
-        let deep = BALL_MOTIONS * motion;
+    fn holds_each<'a>(
+        obstacles: impl Iterator<Item = &'a Obstacle> + Clone,
+        motion: f32,
+        h: f32,
+    ) -> bool {
         obstacles.clone().next().is_some()
-            && obstacles.clone().all(|o| o.is_still() && held_shape(o))
-            && obstacles
-                .flat_map(|o| pieces(&*o.shape))
-                .all(|(_, _, shape)| {
+            && obstacles.clone().all(lane_held)
+            && obstacles.into_iter().all(|o| {
+                // Relative to the obstacle: its own move adds to the particle's.
+                let deep = BALL_MOTIONS * (motion + o.linvel.length() * h);
+                pieces(&*o.shape).all(|(_, _, shape)| {
                     match (shape.as_ball(), shape.as_capsule(), shape.as_cuboid()) {
                         (Some(ball), _, _) => ball.radius > deep,
                         (_, Some(capsule), _) => capsule.radius > deep,
@@ -228,6 +273,7 @@ impl LaneContacts {
                         }
                     }
                 })
+            })
     }
 
     /// Whether the lanes may hold the still ones among `obstacles` while
@@ -241,8 +287,8 @@ impl LaneContacts {
             && still.into_iter().all(held_shape)
     }
 
-    /// [`Self::begin_holding`] of every obstacle or none: whether it holds
-    /// them all.
+    /// [`Self::begin_holding`] of every obstacle or none, for a substep of
+    /// 1 ms at the step's start: whether it holds them all.
     #[cfg(test)]
     pub fn begin(
         &mut self,
@@ -250,42 +296,57 @@ impl LaneContacts {
         (thickness, motion): (f32, f32),
         n: usize,
     ) -> bool {
-        self.begin_holding(obstacles, (thickness, motion), n) == Holding::All
+        let (end, h) = (1.0e-3, 1.0e-3);
+        self.begin_holding(obstacles, (thickness, motion), (end, h), n) == Holding::All
     }
 
-    /// Takes `obstacles` for a substep of `n` lanes in which no particle
-    /// moves further than `motion` (m), their surfaces moved out by
-    /// `thickness` (m); clears every lane's record. Returns which it
-    /// holds: all ([`Self::holds`]), or the still ones among moving or
-    /// dynamic bodies, when [`Self::holds`] would hold those; else none.
+    /// Takes `obstacles` for a substep of `n` lanes, `h` seconds long and
+    /// ending `end` seconds into the step, in which no particle moves
+    /// further than `motion` (m), their surfaces moved out by `thickness`
+    /// (m); clears every lane's record. A moving obstacle is taken where
+    /// it is at the substep's end, as the collision stage takes it.
+    /// Returns which it holds: all ([`Self::holds`]), or the still ones
+    /// among others (moving or dynamic), when [`Self::holds`] would hold
+    /// those; else none.
     pub fn begin_holding(
         &mut self,
         obstacles: &[Obstacle],
         (thickness, motion): (f32, f32),
+        (end, h): (f32, f32),
         n: usize,
     ) -> Holding {
         self.shapes.clear();
         self.friction.clear();
+        self.shifts.clear();
         self.hulls.clear();
         self.meshes.begin();
-        let holding = if Self::holds(obstacles, motion) {
+        let holding = if Self::holds(obstacles, motion, h) {
             Holding::All
         } else if obstacles.iter().any(|o| !o.is_still())
-            && Self::holds_each(obstacles.iter().filter(|o| o.is_still()), motion)
+            && Self::holds_each(obstacles.iter().filter(|o| o.is_still()), motion, h)
         {
             Holding::Still
         } else {
             return Holding::None;
         };
         for (index, o) in obstacles.iter().enumerate() {
-            if !o.is_still() {
+            let still = o.is_still();
+            if holding == Holding::Still && !still {
                 continue;
             }
+            // A still obstacle's own pose (the bits of its translation as
+            // given, −0 among them); a moving one's at the substep's end.
+            let (at, shift) = if still {
+                (o.pose, Vector::ZERO)
+            } else {
+                (o.pose_at(end), o.linvel * h)
+            };
             for (part, placed, shape) in pieces(&*o.shape) {
-                let pose = o.pose * placed;
-                let still = self.still_shape((shape, &pose), (index, part), (thickness, motion), n);
-                self.shapes.push(still);
+                let pose = at * placed;
+                let held = self.still_shape((shape, &pose), (index, part), (thickness, motion), n);
+                self.shapes.push(held);
                 self.friction.push(o.friction);
+                self.shifts.push(shift);
             }
         }
         self.depth.clear();
@@ -302,6 +363,11 @@ impl LaneContacts {
             record.resize(slots * n, f32::NEG_INFINITY);
         }
         holding
+    }
+
+    /// Whether a shape held this substep moves.
+    fn moving(&self) -> bool {
+        self.shifts.iter().any(|&s| s != Vector::ZERO)
     }
 
     /// The still `shape` at `pose` (piece `part` of a compound, or the
@@ -395,7 +461,7 @@ impl LaneContacts {
             return;
         }
         let simd = simd_available();
-        for shape in &self.shapes {
+        for (shape, &shift) in self.shapes.iter().zip(&self.shifts) {
             let Some(slot) = shape.slot() else {
                 continue;
             };
@@ -418,7 +484,9 @@ impl LaneContacts {
                     )
                 };
                 match *shape {
-                    StillShape::Cuboid(cuboid) => planes_of(&cuboid, start, &mut out, simd),
+                    StillShape::Cuboid(cuboid) => {
+                        moved_planes_of((&cuboid, shift), start, &mut out, simd);
+                    }
                     StillShape::Convex(convex) => convex_planes_of(
                         &convex,
                         (&obstacles[convex.obstacle], &self.hulls),
@@ -590,6 +658,7 @@ impl LaneContacts {
         if self.is_empty() {
             return 0.0;
         }
+        let moving = self.moving();
         let [lx, ly, lz, sx, sy, sz, lw] = lanes.disjoint();
         let (depth, touch) = (
             Disjoint::new(&mut self.depth[..]),
@@ -598,6 +667,7 @@ impl LaneContacts {
         let law = Law {
             shapes: &self.shapes,
             friction: friction.then_some(&self.friction[..]),
+            shifts: (friction && moving).then_some(&self.shifts[..]),
             planes: self.planes.each_ref().map(|r| &r[..]),
             lanes: self.lanes,
         };
@@ -629,6 +699,10 @@ impl LaneContacts {
 struct Law<'a> {
     shapes: &'a [StillShape],
     friction: Option<&'a [f32]>,
+    /// With friction, when a shape moves: how far (m) each shape's
+    /// surface moves over the substep ([`LaneContacts::shifts`]); a slide
+    /// is taken relative to it.
+    shifts: Option<&'a [Vector]>,
     /// The cuboids' planes ([`LaneContacts::planes`]) and the lanes of a slot.
     planes: [&'a [f32]; 4],
     lanes: usize,
@@ -771,6 +845,7 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
     let mut touch = _mm256_castsi256_ps(_mm256_loadu_si256(touch_at));
     let mut normal = [zero; 3];
     let mut mu = zero;
+    let mut shift = [zero; 3];
     let mut any_inside = zero;
     for (o, &shape) in law.shapes.iter().enumerate() {
         let mark = _mm256_castsi256_ps(_mm256_set1_epi32(o as i32 + 1));
@@ -864,6 +939,11 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
         ));
         normal = [0, 1, 2].map(|a| _mm256_blendv_ps(normal[a], n[a], this));
         mu = _mm256_blendv_ps(mu, coefficient, this);
+        if let Some(shifts) = law.shifts {
+            let s = shifts[o];
+            let s = [s.x, s.y, s.z].map(|v| _mm256_set1_ps(v));
+            shift = [0, 1, 2].map(|a| _mm256_blendv_ps(shift[a], s[a], this));
+        }
     }
     let touched = _mm256_xor_ps(
         _mm256_castsi256_ps(_mm256_cmpeq_epi32(
@@ -878,7 +958,11 @@ unsafe fn eight_avx2(c: &mut Chunk, k: usize, law: &Law, far: &mut std::arch::x8
     }
     if slides {
         let start = c.start.map(|s| _mm256_loadu_ps(s[at.clone()].as_ptr()));
-        let slide = [0, 1, 2].map(|a| _mm256_sub_ps(p[a], start[a]));
+        let mut slide = [0, 1, 2].map(|a| _mm256_sub_ps(p[a], start[a]));
+        if law.shifts.is_some() {
+            // Relative to the surface, which moved too.
+            slide = [0, 1, 2].map(|a| _mm256_sub_ps(slide[a], shift[a]));
+        }
         let along = _mm256_add_ps(
             _mm256_add_ps(
                 _mm256_mul_ps(normal[0], slide[0]),
@@ -1633,6 +1717,35 @@ fn planes_of(cuboid: &StillCuboid, start: [&[f32]; 3], out: &mut [&mut [f32]; 4]
     }
 }
 
+/// The planes of `cuboid` ([`planes_of`]) when it moves by `shift` (m)
+/// over the substep, `cuboid` being where it is at the substep's end: each
+/// taken from where its lane started relative to the cuboid (at the
+/// cuboid where it was at the substep's start), then moved with it. A
+/// still cuboid's are [`planes_of`]'s own.
+fn moved_planes_of(
+    (cuboid, shift): (&StillCuboid, Vector),
+    start: [&[f32]; 3],
+    out: &mut [&mut [f32]; 4],
+    simd: bool,
+) {
+    if shift == Vector::ZERO {
+        planes_of(cuboid, start, out, simd);
+        return;
+    }
+    let before = StillCuboid {
+        centre: cuboid.centre - shift,
+        ..*cuboid
+    };
+    planes_of(&before, start, out, simd);
+    let [nx, ny, nz, offset] = out;
+    let n = offset.len();
+    assert!([nx.len(), ny.len(), nz.len()] == [n; 3]);
+    for k in 0..n {
+        // No plane (−∞) stays none.
+        offset[k] += nx[k] * shift.x + ny[k] * shift.y + nz[k] * shift.z;
+    }
+}
+
 /// A squared distance from a ball's centre under which a lane may be
 /// inside it, `reach` (m) out: the square of `reach` with a margin for the
 /// rounding of a squared distance (never under it where the exact test,
@@ -1657,6 +1770,7 @@ fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
     // that last pushed it (zero for none).
     let mut normal = [[0.0f32; W]; 3];
     let mut mu = [0.0f32; W];
+    let mut shift = [[0.0f32; W]; 3];
     for (o, &shape) in law.shapes.iter().enumerate() {
         let mark = o as u32 + 1;
         let mut to = [[0.0f32; W]; 3];
@@ -1700,6 +1814,7 @@ fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
             }
         }
         let coefficient = law.friction.map_or(0.0, |f| f[o]);
+        let moves = law.shifts.map_or([0.0; 3], |s| [s[o].x, s[o].y, s[o].z]);
         for k in 0..W {
             for a in 0..3 {
                 e.p[a][k] = if inside[k] { to[a][k] } else { e.p[a][k] };
@@ -1712,17 +1827,26 @@ fn eight(e: &mut Eight, law: &Law, farthest: &mut [f32; W]) {
                 normal[a][k] = if this { n[a][k] } else { normal[a][k] };
             }
             mu[k] = if this { coefficient } else { mu[k] };
+            for a in 0..3 {
+                shift[a][k] = if this { moves[a] } else { shift[a][k] };
+            }
         }
     }
     if law.friction.is_none() {
         return;
     }
     for k in 0..W {
-        let slide = [
+        let mut slide = [
             e.p[0][k] - e.start[0][k],
             e.p[1][k] - e.start[1][k],
             e.p[2][k] - e.start[2][k],
         ];
+        if law.shifts.is_some() {
+            // Relative to the surface, which moved too.
+            for a in 0..3 {
+                slide[a] -= shift[a][k];
+            }
+        }
         let n = [normal[0][k], normal[1][k], normal[2][k]];
         let along = n[0] * slide[0] + n[1] * slide[1] + n[2] * slide[2];
         let tangent = [
@@ -1804,6 +1928,7 @@ mod tests {
         let law = Law {
             shapes: &contacts.shapes,
             friction: friction.then_some(&contacts.friction[..]),
+            shifts: (friction && contacts.moving()).then_some(&contacts.shifts[..]),
             planes: contacts.planes.each_ref().map(|r| &r[..]),
             lanes: contacts.lanes,
         };
@@ -2035,24 +2160,113 @@ mod tests {
         assert!(y.iter().all(|&y| (y - THICKNESS).abs() < 1e-6));
     }
 
-    /// The lanes hold still convex shapes and meshes without an inside
-    /// only, and no ball, capsule or cuboid the substep's motion could
-    /// carry a particle far into.
+    /// A cuboid sliding along x without turning (a kinematic platform)
+    /// is held where it is at the substep's end: a lane that rested on its
+    /// top and sank a little is put back on it and, with friction enough,
+    /// carried along by the cuboid's move (its slide taken relative to the
+    /// surface), without friction left where it was; a lane that rested
+    /// against the face the cuboid moves into is pushed out with that
+    /// face. The portable and the AVX2 passes agree to the bit.
     #[test]
-    fn the_lanes_hold_still_convex_shapes_and_meshes_only() {
+    fn a_sliding_cuboid_holds_its_lanes_on_its_moved_faces_and_carries_them_by_friction() {
+        let half = Vector::new(0.5, 0.05, 0.5);
+        let speed = 0.5;
+        let (end, h) = (1.0e-3, 1.0e-3);
+        let shift = speed * h;
+        let (sink, n) = (0.0004, 19);
+        // Even lanes rest on the top (and sank), odd ones against the +x face.
+        let place = || {
+            placed(n, |k| {
+                let s = k as f32 / n as f32 - 0.5;
+                if k % 2 == 0 {
+                    let start = Vector::new(0.8 * s, half.y + THICKNESS, 0.3 * s);
+                    (start - Vector::Y * sink, start, 1.0)
+                } else {
+                    let start = Vector::new(half.x + THICKNESS, 0.8 * half.y * s, 0.6 * s);
+                    (start, start, 1.0)
+                }
+            })
+        };
+        for friction in [2.0, 0.0] {
+            let table = Obstacle::cuboid(half, Pose::IDENTITY)
+                .with_velocity(Vector::X * speed, Vector::ZERO)
+                .with_friction(friction);
+            let obstacles = std::slice::from_ref(&table);
+            let mut contacts = LaneContacts::default();
+            let holding = contacts.begin_holding(obstacles, (THICKNESS, 0.001), (end, h), n);
+            assert_eq!(holding, Holding::All);
+            let mut l = place();
+            contacts.take_planes(obstacles, &mut l, Team::ALONE);
+            let mut portable = place();
+            contacts.project_with_friction(&mut l, Team::ALONE);
+            let touch = contacts.touch.clone();
+            contacts.depth.fill(0.0);
+            contacts.touch.fill(0);
+            portable_pass(&mut contacts, &mut portable, true);
+            assert_eq!(bits(&mut l), bits(&mut portable), "AVX2 and portable");
+            assert_eq!(touch, contacts.touch);
+            let [x, y, z, sx, _, sz, _] = l.arrays_mut();
+            for k in 0..n {
+                if k % 2 == 0 {
+                    let carried = if friction > 0.0 { shift } else { 0.0 };
+                    assert!(
+                        (y[k] - (half.y + THICKNESS)).abs() < 1e-6,
+                        "lane {k}: {}",
+                        y[k]
+                    );
+                    assert!(
+                        (x[k] - (sx[k] + carried)).abs() < 1e-6,
+                        "lane {k}: {}",
+                        x[k]
+                    );
+                } else {
+                    let face = shift + half.x + THICKNESS;
+                    assert!(
+                        (x[k] - face).abs() < 1e-6,
+                        "lane {k}: {} not at {face}",
+                        x[k]
+                    );
+                }
+                assert!((z[k] - sz[k]).abs() < 1e-6, "lane {k} slid across");
+            }
+            assert!(touch.iter().all(|&t| t == 1), "{touch:?}");
+        }
+    }
+
+    /// The lanes hold still convex shapes and meshes without an inside,
+    /// and balls, capsules, half-spaces and cuboids moving without
+    /// turning; no ball, capsule or cuboid the substep's motion (the
+    /// particles' and its own) could carry a particle far into.
+    #[test]
+    fn the_lanes_hold_still_or_sliding_shapes_the_motion_cannot_cross() {
         let [ball, floor] = ball_and_floor();
-        assert!(LaneContacts::holds(&[ball.clone(), floor.clone()], 0.01));
-        assert!(!LaneContacts::holds(&[], 0.01), "nothing to hold");
+        // In substeps of a millisecond.
+        let holds = |o: &[Obstacle], motion| LaneContacts::holds(o, motion, 1.0e-3);
+        assert!(holds(&[ball.clone(), floor.clone()], 0.01));
+        assert!(!holds(&[], 0.01), "nothing to hold");
         assert!(
-            !LaneContacts::holds(std::slice::from_ref(&ball), 0.2),
+            !holds(std::slice::from_ref(&ball), 0.2),
             "moves a radius in a few substeps"
         );
         assert!(
-            LaneContacts::holds(std::slice::from_ref(&floor), 10.0),
+            holds(std::slice::from_ref(&floor), 10.0),
             "a floor whatever the motion"
         );
+        // A ball moving without turning, by its move and the particles'
+        // together (1 m/s: a millimetre a substep); not one that turns.
         let moving = ball.clone().with_velocity(Vector::X, Vector::ZERO);
-        assert!(!LaneContacts::holds(&[moving, floor.clone()], 0.01));
+        assert!(holds(&[moving.clone(), floor.clone()], 0.01));
+        assert!(
+            !holds(&[moving.clone(), floor.clone()], 0.1245),
+            "0.1245 m + 1 mm a substep, four times over, is past its 0.5 m radius"
+        );
+        assert!(holds(std::slice::from_ref(&ball), 0.1245));
+        let turning = ball.clone().with_velocity(Vector::ZERO, Vector::Y);
+        assert!(!holds(&[turning, floor.clone()], 0.01));
+        // A moving shape the lanes take from lists made for one pose.
+        let rolling = Obstacle::new(SharedShape::cylinder(0.5, 0.3), Pose::IDENTITY)
+            .with_velocity(Vector::X, Vector::ZERO);
+        assert!(!holds(&[rolling, floor.clone()], 0.001));
         let mut dynamic = ball.clone();
         dynamic.body = Some(DynamicBody {
             inverse_mass: Vector::ONE,
@@ -2060,38 +2274,35 @@ mod tests {
             center_of_mass: Vector::Y,
             acceleration: Vector::ZERO,
         });
-        assert!(!LaneContacts::holds(&[dynamic], 0.01));
+        assert!(!holds(&[dynamic], 0.01));
         let table = Obstacle::cuboid(Vector::new(0.5, 0.02, 0.5), Pose::IDENTITY);
-        assert!(LaneContacts::holds(&[ball.clone(), table.clone()], 0.004));
+        assert!(holds(&[ball.clone(), table.clone()], 0.004));
         assert!(
-            !LaneContacts::holds(&[ball.clone(), table.clone()], 0.006),
+            !holds(&[ball.clone(), table.clone()], 0.006),
             "a 2 cm top the motion could carry a particle through"
         );
         let capsule = Obstacle::new(SharedShape::capsule_y(0.5, 0.1), Pose::IDENTITY);
-        assert!(LaneContacts::holds(&[ball.clone(), capsule.clone()], 0.001));
+        assert!(holds(&[ball.clone(), capsule.clone()], 0.001));
         assert!(
-            !LaneContacts::holds(&[ball.clone(), capsule], 0.03),
+            !holds(&[ball.clone(), capsule], 0.03),
             "a 10 cm bar the motion could carry a particle through"
         );
         // Other convex shapes by their own box's half extents.
         let cylinder = Obstacle::new(SharedShape::cylinder(0.5, 0.1), Pose::IDENTITY);
-        assert!(LaneContacts::holds(
-            &[ball.clone(), cylinder.clone()],
-            0.001
-        ));
+        assert!(holds(&[ball.clone(), cylinder.clone()], 0.001));
         assert!(
-            !LaneContacts::holds(&[ball.clone(), cylinder], 0.03),
+            !holds(&[ball.clone(), cylinder], 0.03),
             "a 10 cm rod the motion could carry a particle through"
         );
         let cone = Obstacle::new(SharedShape::cone(0.2, 0.15), Pose::IDENTITY);
-        assert!(LaneContacts::holds(std::slice::from_ref(&cone), 0.001));
+        assert!(holds(std::slice::from_ref(&cone), 0.001));
         let triangle = Obstacle::new(
             SharedShape::triangle(Vector::ZERO, Vector::X, Vector::Z),
             Pose::IDENTITY,
         );
         assert!(
             LaneContacts::may_hold(std::slice::from_ref(&triangle))
-                && !LaneContacts::holds(std::slice::from_ref(&triangle), 0.001),
+                && !holds(std::slice::from_ref(&triangle), 0.001),
             "a triangle is flat"
         );
         // Not convex but held: a mesh of two triangles, whatever its
@@ -2110,7 +2321,7 @@ mod tests {
             .expect("a mesh"),
             Pose::IDENTITY,
         );
-        assert!(LaneContacts::holds(&[ball.clone(), mesh.clone()], 0.001));
+        assert!(holds(&[ball.clone(), mesh.clone()], 0.001));
         let tetrahedron = |flags| {
             let corners = vec![Vector::ZERO, Vector::X, Vector::Y, Vector::Z];
             let faces = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
@@ -2498,7 +2709,7 @@ mod tests {
             ]),
             place,
         );
-        assert!(!LaneContacts::holds(&[with_triangle], motion));
+        assert!(!LaneContacts::holds(&[with_triangle], motion, 1.0e-3));
     }
 
     /// A turned cylinder's planes in single precision agree with those

@@ -712,9 +712,11 @@ fn max_rest_length(cloth: &Cloth) -> f32 {
 /// still ball, half-space or cuboid: the lanes may hold their contacts
 /// ([`LaneContacts::may_hold`]). Asked only while no obstacle with edges
 /// is within reach ([`ClothSolver::substeps_among`]): a cuboid that may
-/// be is the edge rule's.
+/// be is the edge rule's. (Measured on still obstacles only: a moving
+/// one keeps the substeps.)
 fn unpinned_among_round(cloth: &Cloth, obstacles: &[Obstacle]) -> bool {
     !cloth.params.self_collision
+        && obstacles.iter().all(Obstacle::is_still)
         && LaneContacts::may_hold(obstacles)
         && !cloth.particles.inv_mass.contains(&0.0)
 }

@@ -290,7 +290,12 @@ pub(crate) fn step(
             }
             let motion = f32::from_bits(fastest.into_inner()).sqrt() * h;
             let contacts = &mut ws.lane_contacts;
-            let holding = contacts.begin_holding(sub.obstacles, (sub.ctx.thickness, motion), n);
+            let holding = contacts.begin_holding(
+                sub.obstacles,
+                (sub.ctx.thickness, motion),
+                (sub.ctx.substep_end(), h),
+                n,
+            );
             let held = holding != Holding::None;
             if held {
                 contacts.take_planes(sub.obstacles, l, team);
