@@ -530,11 +530,19 @@ impl LaneContacts {
             return 0.0;
         }
         let mut farthest = 0.0f32;
+        // Every spring lies within the lanes' box (the box is convex): a
+        // cuboid whose own box, grown by the margin, is clear of it is
+        // clear of every spring (the `tear`'s bars above its sheet: the
+        // marks and runs were a ninth of its frame).
+        let lanes = lanes_box([&x[..], &y[..], &z[..]]);
         for shape in &self.shapes {
             let StillShape::Cuboid(cuboid) = *shape else {
                 continue;
             };
             let margin = 0.5 * cuboid.thickness;
+            if !cuboid.box_meets(lanes, margin) {
+                continue;
+            }
             let faces = &mut self.faces;
             faces.clear();
             faces.resize(n, 0);
@@ -1089,7 +1097,19 @@ unsafe fn planes_avx2(
             _mm256_loadu_ps(start[1].as_ptr().add(k)),
             _mm256_loadu_ps(start[2].as_ptr().add(k)),
         ];
-        let (normal, offset) = cuboid_plane_avx2(cuboid, s);
+        let far = far_from_cuboid_avx2(cuboid, s);
+        let (normal, offset) = if _mm256_movemask_ps(far) == 0xff {
+            // All eight far: the kernel's sqrt and division for nothing
+            // (the `tear`'s two bars over its sheet, planes a seventh of
+            // the frame before).
+            ([_mm256_setzero_ps(); 3], _mm256_set1_ps(f32::NEG_INFINITY))
+        } else {
+            let (normal, offset) = cuboid_plane_avx2(cuboid, s);
+            (
+                normal.map(|n| _mm256_andnot_ps(far, n)),
+                _mm256_blendv_ps(offset, _mm256_set1_ps(f32::NEG_INFINITY), far),
+            )
+        };
         for a in 0..3 {
             _mm256_storeu_ps(out[a].as_mut_ptr().add(k), normal[a]);
         }
@@ -1097,6 +1117,37 @@ unsafe fn planes_avx2(
         k += W;
     }
     k
+}
+
+/// Which of eight lanes that start at `start` are surely beyond the
+/// reach of `cuboid` ([`far_from_cuboid`]), in AVX2 registers: the same
+/// operations in the same order.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn far_from_cuboid_avx2(
+    cuboid: &StillCuboid,
+    start: [std::arch::x86_64::__m256; 3],
+) -> std::arch::x86_64::__m256 {
+    use std::arch::x86_64::*;
+    let sign_bit = _mm256_set1_ps(-0.0);
+    let centre = [cuboid.centre.x, cuboid.centre.y, cuboid.centre.z];
+    let half = [cuboid.half.x, cuboid.half.y, cuboid.half.z];
+    let d = [0, 1, 2].map(|a| _mm256_sub_ps(start[a], _mm256_set1_ps(centre[a])));
+    let mut most = _mm256_set1_ps(f32::NEG_INFINITY);
+    for a in 0..3 {
+        let axis = cuboid.axes[a];
+        let local = _mm256_add_ps(
+            _mm256_add_ps(
+                _mm256_mul_ps(_mm256_set1_ps(axis.x), d[0]),
+                _mm256_mul_ps(_mm256_set1_ps(axis.y), d[1]),
+            ),
+            _mm256_mul_ps(_mm256_set1_ps(axis.z), d[2]),
+        );
+        let beyond = _mm256_sub_ps(_mm256_andnot_ps(sign_bit, local), _mm256_set1_ps(half[a]));
+        most = _mm256_max_ps(most, beyond);
+    }
+    _mm256_cmp_ps::<_CMP_GT_OQ>(most, _mm256_set1_ps(cuboid.far()))
 }
 
 /// [`cuboid_plane`] for eight lanes that start at `start`, in AVX2
@@ -1441,6 +1492,25 @@ impl StillShape {
 }
 
 impl StillCuboid {
+    /// How far (m) out along one of its axes a lane must start to be
+    /// surely beyond its reach ([`far_from_cuboid`]): the reach and a
+    /// margin over the rounding of the distance to it.
+    #[inline(always)]
+    fn far(&self) -> f32 {
+        self.reach * (1.0 + 1.0e-4)
+    }
+
+    /// Whether the cuboid's bounding box grown by `margin` (m), and a hair
+    /// for rounding, meets the box `(lo, hi)` (m).
+    fn box_meets(&self, (lo, hi): (Vector, Vector), margin: f32) -> bool {
+        let extent = self.axes[0].abs() * self.half.x
+            + self.axes[1].abs() * self.half.y
+            + self.axes[2].abs() * self.half.z;
+        let grown = extent + Vector::splat(margin * (1.0 + 1.0e-3) + 1.0e-6);
+        let (min, max) = (self.centre - grown, self.centre + grown);
+        min.cmple(hi).all() && lo.cmple(max).all()
+    }
+
     /// Where `p` (m) is in the cuboid's frame: per axis, the coordinate
     /// and how far beyond the face on that side it is (m, negative inside).
     #[inline(always)]
@@ -1681,6 +1751,9 @@ fn cuboid_nearest(cuboid: &StillCuboid, p: [f32; 3]) -> ([f32; 3], [f32; 3], boo
 /// side is outside it.
 #[inline(always)]
 fn cuboid_plane(cuboid: &StillCuboid, start: [f32; 3]) -> ([f32; 3], f32) {
+    if far_from_cuboid(cuboid, start) {
+        return ([0.0; 3], f32::NEG_INFINITY);
+    }
     let (on, normal, outside, dist) = cuboid_nearest(cuboid, start);
     let applies = if outside { dist < cuboid.reach } else { true };
     let offset = normal[0] * on[0] + normal[1] * on[1] + normal[2] * on[2];
@@ -1693,6 +1766,32 @@ fn cuboid_plane(cuboid: &StillCuboid, start: [f32; 3]) -> ([f32; 3], f32) {
     let deep = from < offset - cuboid.settle;
     let offset = if deep { from } else { offset };
     (normal, if applies { offset } else { f32::NEG_INFINITY })
+}
+
+/// The bounding box (least and greatest corner, m) of the lanes at `p`;
+/// of none, an empty one (least above greatest). Eight running extremes,
+/// not one: a chain of dependent `min`s stalls.
+fn lanes_box(p: [&[f32]; 3]) -> (Vector, Vector) {
+    let (mut lo, mut hi) = ([[f32::INFINITY; W]; 3], [[f32::NEG_INFINITY; W]; 3]);
+    for a in 0..3 {
+        for (k, &v) in p[a].iter().enumerate() {
+            lo[a][k % W] = lo[a][k % W].min(v);
+            hi[a][k % W] = hi[a][k % W].max(v);
+        }
+    }
+    let lo = lo.map(|l| l.into_iter().fold(f32::INFINITY, f32::min));
+    let hi = hi.map(|h| h.into_iter().fold(f32::NEG_INFINITY, f32::max));
+    (Vector::from_array(lo), Vector::from_array(hi))
+}
+
+/// Whether a lane starting at `start` is surely beyond the reach of
+/// `cuboid`: further out along one of its axes than [`StillCuboid::far`].
+/// Its plane is then none, with a zero normal, told without the root and
+/// division of the nearest point (the plane found so would be none too).
+#[inline(always)]
+fn far_from_cuboid(cuboid: &StillCuboid, start: [f32; 3]) -> bool {
+    let (_, beyond) = cuboid.local(start);
+    beyond[0].max(beyond[1]).max(beyond[2]) > cuboid.far()
 }
 
 /// The planes of `cuboid` ([`cuboid_plane`]) for lanes starting at
@@ -3001,6 +3100,68 @@ mod tests {
         match contacts.shapes[..] {
             [StillShape::Cuboid(c)] => c,
             _ => panic!("not one cuboid"),
+        }
+    }
+
+    /// A turned cuboid's grown box ([`StillCuboid::box_meets`]) holds
+    /// every point within the margin of it, so that the springs' pass may
+    /// pass over a cuboid whose box is clear of the lanes'; and the far
+    /// test of its planes ([`far_from_cuboid`]) holds only for points
+    /// beyond its reach, whose plane is none.
+    #[test]
+    fn a_cuboids_box_and_far_test_leave_out_only_what_is_beyond_it() {
+        let turn = glam::Quat::from_rotation_z(2.0)
+            * glam::Quat::from_rotation_y(-0.7)
+            * glam::Quat::from_rotation_x(0.4);
+        let table = Obstacle::cuboid(
+            Vector::new(0.3, 0.05, 0.2),
+            Pose::from_parts(Vector::new(0.2, 0.9, -0.1), turn),
+        );
+        let mut contacts = LaneContacts::default();
+        assert!(contacts.begin(std::slice::from_ref(&table), (THICKNESS, 0.002), 1));
+        let cuboid = cuboid_of(&contacts);
+        let margin = 0.5 * THICKNESS;
+        let (mut met, mut clear, mut far) = (0, 0, 0);
+        for k in 0..20_000 {
+            let s = k as f32;
+            let dir = Vector::new((1.3 * s).sin(), (0.7 * s).cos(), (2.1 * s).sin());
+            let p = table.pose.translation + dir * (0.5 * ((0.37 * s) % 1.0));
+            let distance = contact_prepared(
+                &*table.shape,
+                Analytic::of(&*table.shape),
+                &PoseF64::of(&table.pose),
+                p,
+            )
+            .expect("a contact")
+            .signed_distance;
+            if cuboid.box_meets((p, p), margin) {
+                met += 1;
+            } else {
+                clear += 1;
+                assert!(distance > margin, "{p:?} {distance} m from it, box clear");
+            }
+            let plane = cuboid_plane(&cuboid, [p.x, p.y, p.z]);
+            if far_from_cuboid(&cuboid, [p.x, p.y, p.z]) {
+                far += 1;
+                assert!(distance > cuboid.reach, "{p:?} {distance} m from it, far");
+                assert_eq!(plane, ([0.0; 3], f32::NEG_INFINITY));
+            } else if distance < cuboid.reach * 0.999 {
+                assert!(plane.1.is_finite(), "{p:?} {distance} m from it, no plane");
+            }
+        }
+        assert!(
+            met > 1000 && clear > 1000 && far > 1000,
+            "{met} {clear} {far}"
+        );
+        // Points of its surface, corners and edges among them, moved out
+        // by nine tenths of the margin: in the box, each of them.
+        let half = Vector::new(0.3, 0.05, 0.2);
+        for k in 0..2000 {
+            let s = k as f32;
+            let dir = Vector::new((1.3 * s).sin(), (0.7 * s).cos(), (2.1 * s).sin());
+            let local = (dir * half * 3.0).clamp(-half, half) + dir.normalize() * 0.9 * margin;
+            let p = table.pose.transform_point(local);
+            assert!(cuboid.box_meets((p, p), margin), "{local:?} out of the box");
         }
     }
 
