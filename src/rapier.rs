@@ -324,7 +324,25 @@ impl RapierCoupling {
         // at up to `max_obstacle_speed`; then only those whose path this step
         // really crosses the cloth.
         let reach = region.loosened(self.max_obstacle_speed * dt);
-        for (handle, collider) in query.intersect_aabb_conservative(reach) {
+        // The broad phase holds the colliders of rapier's last step: before
+        // the first, or with colliders inserted or enabled since, it misses
+        // some, and every enabled collider is looked at instead (a cloth
+        // stepped before the world's first step fell through a rising slab
+        // for that frame).
+        let enabled = sets.colliders.iter_enabled().count();
+        let stale = (query.bvh.leaf_count() as usize) < enabled;
+        let from_broad_phase = (!stale).then(|| query.intersect_aabb_conservative(reach));
+        let every = stale.then(|| {
+            sets.colliders
+                .iter_enabled()
+                .filter(move |(handle, c)| filter.test(bodies, *handle, c))
+                .filter(move |(_, c)| c.compute_aabb().intersects(&reach))
+        });
+        let candidates = from_broad_phase
+            .into_iter()
+            .flatten()
+            .chain(every.into_iter().flatten());
+        for (handle, collider) in candidates {
             if !collider.is_enabled() {
                 continue;
             }
