@@ -368,7 +368,7 @@ fn sheet_over_a_cuboid() -> Simulation {
 }
 
 #[test]
-fn xpbd_takes_12_substeps_free_among_still_balls_32_near_a_still_cuboid_and_the_sweeps_own_near_a_moving_one(
+fn xpbd_takes_12_substeps_free_among_still_balls_32_near_a_still_or_sliding_cuboid_and_the_sweeps_own_near_a_turning_one(
 ) {
     let sim = sheet_over_a_cuboid();
     let dt = 1.0 / 60.0;
@@ -424,8 +424,52 @@ fn xpbd_takes_12_substeps_free_among_still_balls_32_near_a_still_cuboid_and_the_
         "a still cuboid out of reach: as none, the lanes would hold it"
     );
     assert_eq!(among(std::slice::from_ref(&still)), 32);
-    assert_eq!(among(&[still.clone(), moving.clone()]), sweeps);
-    assert_eq!(among(std::slice::from_ref(&moving)), sweeps);
+    // Sliding without turning, the lanes hold it as they hold a still
+    // one: the same count.
+    assert_eq!(among(&[still.clone(), moving.clone()]), 32);
+    assert_eq!(among(std::slice::from_ref(&moving)), 32);
+    // Turning, the collision stage answers for it after every substep.
+    let turning = still
+        .clone()
+        .with_velocity(Vector::ZERO, Vector::new(0.0, 0.5, 0.0));
+    assert_eq!(among(&[still.clone(), turning.clone()]), sweeps);
+    assert_eq!(among(std::slice::from_ref(&turning)), sweeps);
+}
+
+#[test]
+fn a_tablecloth_dropped_on_a_sliding_table_rides_it_within_five_percent() {
+    // A 60 × 60 cm table sliding along x at 0.5 m/s (a kinematic body, say)
+    // and a 1 m cotton tablecloth dropped on it: the lanes hold the table
+    // where it is at each substep's end, in 32 substeps a frame.
+    let mut sim = Simulation::new(
+        ClothBuilder::new(48, 48)
+            .size(1.0, 1.0)
+            .horizontal(Vector::new(0.0, 0.3, 0.0))
+            .material(Material::cotton())
+            .build()
+            .unwrap(),
+    );
+    let (dt, speed, half) = (1.0 / 60.0, 0.5, Vector::new(0.3, 0.02, 0.3));
+    let table_at = |x: f32| Obstacle::cuboid(half, Pose::from_translation(Vector::X * x));
+    let (mut x, mut most) = (0.0f32, 0);
+    for frame in 0..120 {
+        let table = table_at(x)
+            .with_velocity(Vector::X * speed, Vector::ZERO)
+            .with_friction(0.5);
+        let report = sim.step(dt, std::slice::from_ref(&table)).unwrap();
+        most = most.max(report.substeps);
+        x += speed * dt;
+        let stretch = cloth3d::metrics::max_stretch(&sim.cloth);
+        let deepest = cloth3d::metrics::max_penetration(&sim.cloth, &[table_at(x)]);
+        assert!(stretch < 0.05, "frame {frame}: {stretch} stretch");
+        assert!(deepest <= 0.001, "frame {frame}: {deepest} m deep");
+    }
+    // The table's edges in reach: 32, not the sweeps' own (41).
+    assert_eq!(most, 32);
+    // It landed at 0.25 s, with the table 12.5 cm on, and rides it 1 m on
+    // by friction, still on its top.
+    let c = sim.centroid();
+    assert!(c.x > 0.75 && c.y > -0.1, "{c:?}, the table at {x}");
 }
 
 #[test]

@@ -222,8 +222,12 @@ impl ClothSolver {
     /// lengthen them while an obstacle with edges or corners
     /// ([`Obstacle::has_edges`]) is within reach of the cloth this step.
     /// Then they are at least 32 a frame at 60 Hz if every such obstacle is
-    /// still (its contacts are held inside the substep as planes), and the
-    /// sweeps' own count if one moves. Measured (BENCHMARKS.md, sixteenth
+    /// still or slides without turning (its contacts are held inside the
+    /// substep as planes, in the lanes where they may hold it: a 48 × 48
+    /// cotton tablecloth dropped on a table sliding at 0.5 or 1 m/s
+    /// peaked at 4.51% stretch at 41 substeps and at 32, without
+    /// penetration), and the sweeps' own count if one turns or is a
+    /// dynamic body. Measured (BENCHMARKS.md, sixteenth
     /// and seventeenth sessions): a 48 × 48 cotton tablecloth dropped on a
     /// table peaked at 12.3% stretch with the chains' 9 substeps and no
     /// planes, 4.58% at 32 with them (4.53% at the sweeps' 41); the drape
@@ -726,9 +730,10 @@ fn unpinned_among_round(cloth: &Cloth, obstacles: &[Obstacle]) -> bool {
 enum EdgesNear {
     /// None.
     None,
-    /// Some, every one of them still ([`Obstacle::is_still`]).
+    /// Some, every one of them still ([`Obstacle::is_still`]) or sliding
+    /// without turning, as the lanes hold it ([`LaneContacts::may_hold`]).
     Still,
-    /// Some, and one of them moves.
+    /// Some, and one of them turns or is a dynamic body.
     Moving,
 }
 
@@ -736,7 +741,8 @@ enum EdgesNear {
 /// of `dt` seconds: those whose swept bounding box meets the cloth's, grown
 /// by how far a particle may move in the step; of a still one, only an
 /// edge counts ([`Obstacle::edges_may_meet`]): a cloth on the middle of a
-/// floor meets a face, which holds it as a plane does.
+/// floor meets a face, which holds it as a plane does. One the lanes hold
+/// as it slides counts as a still one whose edges are near.
 fn edges_within_reach(cloth: &Cloth, obstacles: &[Obstacle], dt: f32) -> EdgesNear {
     if !obstacles.iter().any(Obstacle::has_edges) {
         return EdgesNear::None;
@@ -752,10 +758,11 @@ fn edges_within_reach(cloth: &Cloth, obstacles: &[Obstacle], dt: f32) -> EdgesNe
     let mut near = EdgesNear::None;
     for o in obstacles {
         if o.has_edges() && o.swept_aabb(dt).intersects(&cloth_box) {
-            if !o.is_still() {
+            let held = LaneContacts::may_hold(std::slice::from_ref(o));
+            if !o.is_still() && !held {
                 return EdgesNear::Moving;
             }
-            if o.edges_may_meet(&cloth_box) {
+            if !o.is_still() || o.edges_may_meet(&cloth_box) {
                 near = EdgesNear::Still;
             }
         }
