@@ -454,7 +454,7 @@ impl LaneContacts {
     /// [`Self::begin`] with the same `obstacles` and before the passes.
     pub fn take_planes(&mut self, obstacles: &[Obstacle], lanes: &mut Lanes, team: Team) {
         let n = self.lanes;
-        let [_, _, _, sx, sy, sz, _] = lanes.disjoint();
+        let [_, _, _, sx, sy, sz, lw] = lanes.disjoint();
         if sx.len() != n {
             // No lanes to take planes for: none holds one.
             self.planes[3].fill(f32::NEG_INFINITY);
@@ -476,16 +476,17 @@ impl LaneContacts {
                 .map(|r| Disjoint::new(&mut r[slot.clone()]));
             team.largest_over_chunks((n, CHUNK), |range| {
                 // SAFETY: chunks are disjoint ranges of lanes; the start
-                // positions are only read.
-                let (start, mut out) = unsafe {
+                // positions and inverse masses are only read.
+                let (start, w, mut out) = unsafe {
                     (
                         [sx, sy, sz].map(|a| &*a.range(range.clone())),
+                        &*lw.range(range.clone()),
                         [nx, ny, nz, offset].map(|a| a.range(range.clone())),
                     )
                 };
                 match *shape {
                     StillShape::Cuboid(cuboid) => {
-                        moved_planes_of((&cuboid, shift), start, &mut out, simd);
+                        moved_planes_of((&cuboid, shift), (start, w), &mut out, simd);
                     }
                     StillShape::Convex(convex) => convex_planes_of(
                         &convex,
@@ -1095,13 +1096,14 @@ unsafe fn behind_plane_avx2(
 #[target_feature(enable = "avx2")]
 unsafe fn planes_avx2(
     cuboid: &StillCuboid,
-    start: [&[f32]; 3],
+    (start, w): ([&[f32]; 3], &[f32]),
     out: &mut [&mut [f32]; 4],
 ) -> usize {
     crate::math::align_frame();
     use std::arch::x86_64::*;
     let n = start[0].len();
     assert!(start.iter().all(|s| s.len() == n) && out.iter().all(|o| o.len() == n));
+    assert!(w.len() == n);
     let mut k = 0;
     while k + W <= n {
         // SAFETY: lanes `k..k + 8` are within every array (asserted).
@@ -1110,11 +1112,13 @@ unsafe fn planes_avx2(
             _mm256_loadu_ps(start[1].as_ptr().add(k)),
             _mm256_loadu_ps(start[2].as_ptr().add(k)),
         ];
-        let far = far_from_cuboid_avx2(cuboid, s);
+        let pinned =
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(_mm256_loadu_ps(w.as_ptr().add(k)), _mm256_setzero_ps());
+        let far = _mm256_or_ps(far_from_cuboid_avx2(cuboid, s), pinned);
         let (normal, offset) = if _mm256_movemask_ps(far) == 0xff {
-            // All eight far: the kernel's sqrt and division for nothing
-            // (the `tear`'s two bars over its sheet, planes a seventh of
-            // the frame before).
+            // All eight far or pinned: the kernel's sqrt and division for
+            // nothing (the `tear`'s two bars over its sheet, planes a
+            // seventh of the frame before).
             ([_mm256_setzero_ps(); 3], _mm256_set1_ps(f32::NEG_INFINITY))
         } else {
             let (normal, offset) = cuboid_plane_avx2(cuboid, s);
@@ -1819,20 +1823,32 @@ fn far_from_cuboid(cuboid: &StillCuboid, start: [f32; 3]) -> bool {
 }
 
 /// The planes of `cuboid` ([`cuboid_plane`]) for lanes starting at
-/// `start`, into `out` (normal x, y, z, offset), eight at a time in AVX2
-/// when `simd`.
-fn planes_of(cuboid: &StillCuboid, start: [&[f32]; 3], out: &mut [&mut [f32]; 4], simd: bool) {
+/// `start` with inverse masses `w`, into `out` (normal x, y, z, offset),
+/// eight at a time in AVX2 when `simd`. A pinned lane's is none: no pass
+/// moves it (the bars the `tear` hangs from hold its edges' particles
+/// within their reach).
+fn planes_of(
+    cuboid: &StillCuboid,
+    (start, w): ([&[f32]; 3], &[f32]),
+    out: &mut [&mut [f32]; 4],
+    simd: bool,
+) {
     let n = start[0].len();
     assert!(start.iter().all(|s| s.len() == n) && out.iter().all(|o| o.len() == n));
+    assert!(w.len() == n);
     let mut k = 0;
     #[cfg(target_arch = "x86_64")]
     if simd {
         // SAFETY: `simd` only when the CPU has AVX2.
-        k = unsafe { planes_avx2(cuboid, start, out) };
+        k = unsafe { planes_avx2(cuboid, (start, w), out) };
     }
     let _ = simd;
     for k in k..n {
-        let (normal, offset) = cuboid_plane(cuboid, [start[0][k], start[1][k], start[2][k]]);
+        let (normal, offset) = if w[k] == 0.0 {
+            ([0.0; 3], f32::NEG_INFINITY)
+        } else {
+            cuboid_plane(cuboid, [start[0][k], start[1][k], start[2][k]])
+        };
         for a in 0..3 {
             out[a][k] = normal[a];
         }
@@ -1847,7 +1863,7 @@ fn planes_of(cuboid: &StillCuboid, start: [&[f32]; 3], out: &mut [&mut [f32]; 4]
 /// still cuboid's are [`planes_of`]'s own.
 fn moved_planes_of(
     (cuboid, shift): (&StillCuboid, Vector),
-    start: [&[f32]; 3],
+    start: ([&[f32]; 3], &[f32]),
     out: &mut [&mut [f32]; 4],
     simd: bool,
 ) {
@@ -2638,11 +2654,11 @@ mod tests {
         portable.begin(std::slice::from_ref(&table), (THICKNESS, motion), n);
         let mut m = place();
         {
-            let [_, _, _, sx, sy, sz, _] = m.arrays_mut();
+            let [_, _, _, sx, sy, sz, w] = m.arrays_mut();
             let cuboid = cuboid_of(&portable);
             let [a, b, c, d] = &mut portable.planes;
             let mut out = [&mut a[..], &mut b[..], &mut c[..], &mut d[..]];
-            planes_of(&cuboid, [&*sx, &*sy, &*sz], &mut out, false);
+            planes_of(&cuboid, ([&*sx, &*sy, &*sz], &*w), &mut out, false);
         }
         assert_eq!(portable.planes, contacts.planes, "the planes' bits");
         portable_pass(&mut portable, &mut m, false);
