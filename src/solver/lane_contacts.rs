@@ -1,6 +1,6 @@
 //! Contacts with still balls, capsules, half-spaces and cuboids (a ball on
-//! a stand, a bar, a floor, a table), and with sliding ones, held inside the small-steps solver's
-//! substeps, in its grid lanes. The
+//! a stand, a bar, a floor, a table), and with sliding ones, held inside
+//! the small-steps solver's substeps, in its grid lanes. The
 //! collision stage after a substep visits every particle near an obstacle
 //! through its general pass (candidates, exact contact, tracing, friction,
 //! impulses): at N = 128 on the `drape`'s ball that was a third of the
@@ -41,9 +41,9 @@
 //! relative to the surface's move and a cuboid's plane from where the lane
 //! started relative to it ([`lane_held`]). The state then stays in the
 //! lanes among such bodies too: the `tear`, whose sheet hangs from two
-//! sliding bars, ran the collision stage after each of its 40 substeps,
-//! and its frame went from 6.6–7.3 to 4.1–5.3 ms; the `curtain`'s from
-//! 1.7 to 1.2 ms.
+//! sliding bars, ran the collision stage after each of its 43 substeps:
+//! its instructions a frame fell by a third, its frame from 6.7–8.0 to
+//! 3.3–5.5 ms on a slow host; the `curtain`'s by two fifths.
 
 use crate::collision::{chords_clear_ball, Obstacle, EDGE_SAMPLES};
 use crate::math::{simd_available, Pose, Vector};
