@@ -1114,14 +1114,15 @@ unsafe fn planes_avx2(
         ];
         let pinned =
             _mm256_cmp_ps::<_CMP_EQ_OQ>(_mm256_loadu_ps(w.as_ptr().add(k)), _mm256_setzero_ps());
-        let far = _mm256_or_ps(far_from_cuboid_avx2(cuboid, s), pinned);
+        let local = cuboid_local_avx2(cuboid, s);
+        let far = _mm256_or_ps(far_from_cuboid_avx2(cuboid, local), pinned);
         let (normal, offset) = if _mm256_movemask_ps(far) == 0xff {
             // All eight far or pinned: the kernel's sqrt and division for
             // nothing (the `tear`'s two bars over its sheet, planes a
             // seventh of the frame before).
             ([_mm256_setzero_ps(); 3], _mm256_set1_ps(f32::NEG_INFINITY))
         } else {
-            let (normal, offset) = cuboid_plane_avx2(cuboid, s);
+            let (normal, offset) = cuboid_plane_avx2(cuboid, (s, local));
             (
                 normal.map(|n| _mm256_andnot_ps(far, n)),
                 _mm256_blendv_ps(offset, _mm256_set1_ps(f32::NEG_INFINITY), far),
@@ -1136,32 +1137,58 @@ unsafe fn planes_avx2(
     k
 }
 
-/// Which of eight lanes that start at `start` are surely beyond the
-/// reach of `cuboid` ([`far_from_cuboid`]), in AVX2 registers: the same
-/// operations in the same order.
+/// Where eight lanes at `p` (m) are in the frame of `cuboid` (m along
+/// each of its axes from its centre), as [`StillCuboid::local`] finds
+/// them, in AVX2 registers: the same operations in the same order. Found
+/// once for both [`far_from_cuboid_avx2`] and [`cuboid_plane_avx2`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn far_from_cuboid_avx2(
+unsafe fn cuboid_local_avx2(
     cuboid: &StillCuboid,
-    start: [std::arch::x86_64::__m256; 3],
-) -> std::arch::x86_64::__m256 {
+    p: [std::arch::x86_64::__m256; 3],
+) -> [std::arch::x86_64::__m256; 3] {
+    // Loops over the axes, not closures ([`cuboid_plane_avx2`] says why).
     use std::arch::x86_64::*;
-    let sign_bit = _mm256_set1_ps(-0.0);
     let centre = [cuboid.centre.x, cuboid.centre.y, cuboid.centre.z];
-    let half = [cuboid.half.x, cuboid.half.y, cuboid.half.z];
-    let d = [0, 1, 2].map(|a| _mm256_sub_ps(start[a], _mm256_set1_ps(centre[a])));
-    let mut most = _mm256_set1_ps(f32::NEG_INFINITY);
+    let mut d = [_mm256_setzero_ps(); 3];
+    for a in 0..3 {
+        d[a] = _mm256_sub_ps(p[a], _mm256_set1_ps(centre[a]));
+    }
+    let mut local = [_mm256_setzero_ps(); 3];
     for a in 0..3 {
         let axis = cuboid.axes[a];
-        let local = _mm256_add_ps(
+        local[a] = _mm256_add_ps(
             _mm256_add_ps(
                 _mm256_mul_ps(_mm256_set1_ps(axis.x), d[0]),
                 _mm256_mul_ps(_mm256_set1_ps(axis.y), d[1]),
             ),
             _mm256_mul_ps(_mm256_set1_ps(axis.z), d[2]),
         );
-        let beyond = _mm256_sub_ps(_mm256_andnot_ps(sign_bit, local), _mm256_set1_ps(half[a]));
+    }
+    local
+}
+
+/// Which of eight lanes at `local` in the frame of `cuboid`
+/// ([`cuboid_local_avx2`]) are surely beyond its reach
+/// ([`far_from_cuboid`]), in AVX2 registers: the same operations in the
+/// same order.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn far_from_cuboid_avx2(
+    cuboid: &StillCuboid,
+    local: [std::arch::x86_64::__m256; 3],
+) -> std::arch::x86_64::__m256 {
+    use std::arch::x86_64::*;
+    let sign_bit = _mm256_set1_ps(-0.0);
+    let half = [cuboid.half.x, cuboid.half.y, cuboid.half.z];
+    let mut most = _mm256_set1_ps(f32::NEG_INFINITY);
+    for a in 0..3 {
+        let beyond = _mm256_sub_ps(
+            _mm256_andnot_ps(sign_bit, local[a]),
+            _mm256_set1_ps(half[a]),
+        );
         most = _mm256_max_ps(most, beyond);
     }
     _mm256_cmp_ps::<_CMP_GT_OQ>(most, _mm256_set1_ps(cuboid.far()))
@@ -1175,7 +1202,10 @@ unsafe fn far_from_cuboid_avx2(
 #[inline]
 unsafe fn cuboid_plane_avx2(
     cuboid: &StillCuboid,
-    start: [std::arch::x86_64::__m256; 3],
+    (start, local): (
+        [std::arch::x86_64::__m256; 3],
+        [std::arch::x86_64::__m256; 3],
+    ),
 ) -> ([std::arch::x86_64::__m256; 3], std::arch::x86_64::__m256) {
     // Written with loops over the three axes, not closures: a closure
     // does not take the function's AVX2 and was called with its vectors
@@ -1186,10 +1216,8 @@ unsafe fn cuboid_plane_avx2(
     let all = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
     let sign_bit = _mm256_set1_ps(-0.0);
     let t = _mm256_set1_ps(cuboid.thickness);
-    let centre = [cuboid.centre.x, cuboid.centre.y, cuboid.centre.z];
     let half = [cuboid.half.x, cuboid.half.y, cuboid.half.z];
     let mut axes = [[zero; 3]; 3];
-    let mut d = [zero; 3];
     for a in 0..3 {
         let axis = cuboid.axes[a];
         axes[a] = [
@@ -1197,16 +1225,11 @@ unsafe fn cuboid_plane_avx2(
             _mm256_set1_ps(axis.y),
             _mm256_set1_ps(axis.z),
         ];
-        d[a] = _mm256_sub_ps(start[a], _mm256_set1_ps(centre[a]));
     }
     let (mut abs, mut sign, mut beyond) = ([zero; 3], [zero; 3], [zero; 3]);
     let (mut positive, mut over) = ([zero; 3], [zero; 3]);
     for a in 0..3 {
-        let axis = axes[a];
-        let local = _mm256_add_ps(
-            _mm256_add_ps(_mm256_mul_ps(axis[0], d[0]), _mm256_mul_ps(axis[1], d[1])),
-            _mm256_mul_ps(axis[2], d[2]),
-        );
+        let local = local[a];
         abs[a] = _mm256_andnot_ps(sign_bit, local);
         sign[a] = _mm256_or_ps(_mm256_and_ps(local, sign_bit), one);
         beyond[a] = _mm256_sub_ps(abs[a], _mm256_set1_ps(half[a]));

@@ -758,12 +758,14 @@ fn edges_within_reach(cloth: &Cloth, obstacles: &[Obstacle], dt: f32) -> EdgesNe
     let mut near = EdgesNear::None;
     for o in obstacles {
         if o.has_edges() && o.swept_aabb(dt).intersects(&cloth_box) {
-            let held = LaneContacts::may_hold(std::slice::from_ref(o));
-            if !o.is_still() && !held {
-                return EdgesNear::Moving;
-            }
-            if !o.is_still() || o.edges_may_meet(&cloth_box) {
+            if o.is_still() {
+                if o.edges_may_meet(&cloth_box) {
+                    near = EdgesNear::Still;
+                }
+            } else if LaneContacts::may_hold(std::slice::from_ref(o)) {
                 near = EdgesNear::Still;
+            } else {
+                return EdgesNear::Moving;
             }
         }
     }
