@@ -221,11 +221,11 @@ impl ClothSolver {
     /// automatic substeps of the small-steps solver where its chain solves
     /// lengthen them while an obstacle with edges or corners
     /// ([`Obstacle::has_edges`]) is within reach of the cloth this step.
-    /// Then they are at least 32 a frame at 60 Hz if every such obstacle is
+    /// Then they are at least 20 a frame at 60 Hz if every such obstacle is
     /// still or slides without turning (its contacts are held inside the
     /// substep as planes, in the lanes where they may hold it: a 48 × 48
     /// cotton tablecloth dropped on a table sliding at 0.5 or 1 m/s
-    /// peaked at 4.51% stretch at 41 substeps and at 32, without
+    /// peaked at 4.51% stretch at 41 substeps, at 32 and at 20, without
     /// penetration), and the sweeps' own count if one turns or is a
     /// dynamic body. Measured (BENCHMARKS.md, sixteenth
     /// and seventeenth sessions): a 48 × 48 cotton tablecloth dropped on a
@@ -597,7 +597,7 @@ const XPBD_TEAM_MIN_PARTICLES: usize = 8192;
 
 /// Particles from which the small-steps solver shares the step of a grid
 /// cloth without self-collision among threads when the step is busy: near
-/// an obstacle's edges (a still one's take 32 substeps at 60 Hz, each with
+/// an obstacle's edges (a still one's take 20 substeps at 60 Hz, each with
 /// the lanes' planes and the springs kept off the edges) or after a step
 /// that touched an obstacle (the lanes' contacts and the stretch limit at
 /// work). A falling cloth's substeps stay too short to share below

@@ -189,17 +189,26 @@ const XPBD_UNPINNED_SUBSTEPS_PER_SECOND: f32 = 720.0;
 
 /// Automatic substeps a second at least with the chain solves while a still
 /// obstacle with edges or corners is within reach of the cloth (and no
-/// moving one): 32 a frame at 60 Hz. Its contacts are then held inside the
-/// substep as planes (`collision/contact_planes.rs`); what still sets the
-/// substep is a corner, over which the cloth must stretch or fold and the
-/// stretch limit and the contacts pull against each other. Peak stretch
-/// over every frame, measured: the 48 × 48 cotton tablecloth dropped on a
-/// table (`tests/user_drops.rs`, its corners) 5.03% at 16 substeps, 4.92%
-/// at 20, 5.17% at 22, 4.94% at 24, 4.74% at 26, 4.59% at 28, 4.55% at 30,
-/// 4.56% at 32, 4.60% at 34 (4.53% at the sweeps' own 41 without the
-/// planes); `box` 5.8% at 24, 5.45% at 28, 5.23% at 32 (5.95% at the
-/// sweeps' 55 without the planes).
-const XPBD_EDGE_SUBSTEPS_PER_SECOND: f32 = 1920.0;
+/// moving one): 20 a frame at 60 Hz. Its contacts are then held inside the
+/// substep as planes (`collision/contact_planes.rs`, and the lanes' own);
+/// what still sets the substep is a corner, over which the cloth must
+/// stretch or fold and the stretch limit and the contacts pull against
+/// each other. It was 32 (1920 a second) when the limit took turns with
+/// the contacts over a cuboid's edges (the 48 × 48 cotton tablecloth of
+/// `tests/user_drops.rs` peaked at 5.03% at 16 substeps, 4.92% at 20,
+/// 4.56% at 32); since the limit holds the lanes on the cuboid's planes
+/// itself (`xpbd::hold_limit`), the substeps no longer set the peak.
+/// Measured (forty-seventh session, peak stretch over every frame, deepest
+/// penetration): tablecloths of 32², 48² and 64², 1.0–2.0 m, in silk,
+/// cotton and denim dropped on a table with a leg, 4.51% and none at 32,
+/// 24, 20 and 16 substeps; the `box` 4.51% and none at each, 1.673 →
+/// 1.432 → 1.297 G instructions (callgrind, `bench --scene box`, one
+/// thread) at 32, 24 and 20. What breaks first below is a dynamic body
+/// resting on a cloth over a table: at 16 a 1 kg ball on a laid table
+/// still bounced at 0.15 m/s after 150 frames and the limit's rounds
+/// after the contacts ran to 26 a step (`tests/user_drops.rs`); at 20 and
+/// more it rests, with one round at most.
+const XPBD_EDGE_SUBSTEPS_PER_SECOND: f32 = 1200.0;
 
 /// The automatic substeps of a frame step of `dt` seconds near still
 /// obstacles with edges: at least [`XPBD_EDGE_SUBSTEPS_PER_SECOND`].
