@@ -1888,26 +1888,27 @@ fn planes_of(
     }
 }
 
-/// The planes of `cuboid` ([`planes_of`]) when it moves by `shift` (m)
-/// over the substep, `cuboid` being where it is at the substep's end: each
-/// taken from where its lane started relative to the cuboid (at the
-/// cuboid where it was at the substep's start), then moved with it. A
-/// still cuboid's are [`planes_of`]'s own.
+/// The planes of `cuboid` ([`planes_of`]) for lanes starting at `start`
+/// with inverse masses `w` when it moves by `shift` (m) over the substep,
+/// `cuboid` being where it is at the substep's end: each taken from where
+/// its lane started relative to the cuboid (at the cuboid where it was at
+/// the substep's start), then moved with it. A still cuboid's are
+/// [`planes_of`]'s own.
 fn moved_planes_of(
     (cuboid, shift): (&StillCuboid, Vector),
-    start: ([&[f32]; 3], &[f32]),
+    (start, w): ([&[f32]; 3], &[f32]),
     out: &mut [&mut [f32]; 4],
     simd: bool,
 ) {
     if shift == Vector::ZERO {
-        planes_of(cuboid, start, out, simd);
+        planes_of(cuboid, (start, w), out, simd);
         return;
     }
     let before = StillCuboid {
         centre: cuboid.centre - shift,
         ..*cuboid
     };
-    planes_of(&before, start, out, simd);
+    planes_of(&before, (start, w), out, simd);
     let [nx, ny, nz, offset] = out;
     let n = offset.len();
     assert!([nx.len(), ny.len(), nz.len()] == [n; 3]);
