@@ -2347,6 +2347,40 @@ mod tests {
         }
     }
 
+    /// A limit that moves a few springs in a large grid passes over most
+    /// tiles ([`LimitTiles`]) from its third pass: the same bits as one
+    /// spring at a time, and the tiles far from the pulled corner unmoved.
+    #[test]
+    fn the_stretch_limit_passing_over_unmoved_tiles_gives_the_bits_of_one_spring_at_a_time() {
+        // 96 × 80: 120 tiles. A corner of 6 × 6 particles pulled 10% out.
+        let pulled = || {
+            grid_lanes((96, 80), |i, p| {
+                let (r, c) = (i / 96, i % 96);
+                let s = if r < 6 && c < 6 { 1.1 } else { 1.0 };
+                [p.x * s, p.y, p.z * s]
+            })
+        };
+        let (plan, mut reference) = pulled();
+        let shortened = limit_one_by_one(&plan, &mut reference, 1.02);
+        assert!(shortened > 20, "only {shortened} springs over the limit");
+        for simd in [false, simd_available()] {
+            let (mut plan, mut lanes) = pulled();
+            let n = limit_with_simd(&mut plan, &mut lanes, 1.02, simd).shortened;
+            assert_eq!(n, shortened);
+            assert_eq!(bits(&mut lanes), bits(&mut reference));
+            let tiles = &plan.limit_tiles.0;
+            let unmoved = tiles
+                .iter()
+                .filter(|t| t.load(Ordering::Relaxed) == 0)
+                .count();
+            assert!(
+                unmoved > tiles.len() / 2,
+                "{unmoved} of {} tiles unmoved",
+                tiles.len()
+            );
+        }
+    }
+
     /// After an unsettled call the limit holds the long spans in place of
     /// the pairs, with the bits of one spring at a time, and their lengths
     /// are those of the stretch springs they take.
