@@ -241,9 +241,24 @@ fn for_cells((lo, hi): ([i32; 3], [i32; 3]), mut f: impl FnMut([i32; 3])) {
 
 /// The cell of `p` for cells of `1 / inv` metres.
 fn cell_of(p: Vector, inv: f32) -> [i32; 3] {
-    // `as` saturates (and maps NaN to 0): no panic on a wild point.
     let s = p * inv;
-    [s.x.floor() as i32, s.y.floor() as i32, s.z.floor() as i32]
+    [floor_to_i32(s.x), floor_to_i32(s.y), floor_to_i32(s.z)]
+}
+
+/// `v.floor() as i32` (saturating, NaN to 0: no panic on a wild point)
+/// without a call: the baseline x86-64 has no rounding instruction, and
+/// `floorf` was a call a coordinate, 1.3% of the `fold`'s instructions.
+/// Truncation rounds toward zero; a negative `v` with a fraction is then
+/// one above its floor (exact: below 2²⁴ in size an `i32` is an exact
+/// `f32`, above it every `f32` is whole).
+#[inline]
+fn floor_to_i32(v: f32) -> i32 {
+    let t = v as i32;
+    if (t as f32) > v {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
 }
 
 /// The bucket of cell `c` among `buckets` (a power of two).
@@ -255,6 +270,39 @@ fn bucket([x, y, z]: [i32; 3], buckets: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The cell index is the floor's, wild values included.
+    #[test]
+    fn floor_to_i32_is_the_floor_cast() {
+        let mut values = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            -1.0e-30,
+            16_777_215.5,
+            -16_777_215.5,
+            16_777_216.0,
+            -16_777_217.0,
+            2_147_483_520.0,
+            -2_147_483_648.0,
+            2_147_483_648.0,
+            -2_147_483_904.0,
+            1.0e30,
+            -1.0e30,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+        ];
+        values.extend((-2000..2000).map(|i| i as f32 * 0.37));
+        for v in values {
+            assert_eq!(floor_to_i32(v), v.floor() as i32, "{v}");
+        }
+    }
 
     /// Every point in a query box is visited exactly once, and none whose
     /// cell lies outside the box's cells.
