@@ -1384,8 +1384,9 @@ fn limit_stretch_with(
                 first: all,
                 skim: number >= SKIM_FROM,
                 pass: base + number,
-                tiles: (tiles, start),
-                planes: planes.map(|p| (p, region.lanes.start)),
+                start,
+                tiles,
+                planes,
             };
             for &(p, rest) in limits {
                 let rest = &rest[region.lanes.clone()];
@@ -1501,12 +1502,13 @@ struct LimitMarks<'a> {
     /// a time ([`SKIM_FROM`]).
     skim: bool,
     pass: u32,
+    /// The region's first lane among all.
+    start: usize,
     /// Per tile of lanes among all, the last pass that moved any of its
-    /// lanes ([`LimitTiles`]); and the region's first lane among all.
-    tiles: (&'a [AtomicU32], usize),
-    /// The lanes' planes, if the limit holds them ([`limit_stretch`]),
-    /// and the region's first lane among all.
-    planes: Option<(LanePlanes<'a>, usize)>,
+    /// lanes ([`LimitTiles`]).
+    tiles: &'a [AtomicU32],
+    /// The lanes' planes, if the limit holds them ([`limit_stretch`]).
+    planes: Option<LanePlanes<'a>>,
 }
 
 impl LimitMarks<'_> {
@@ -1553,10 +1555,9 @@ impl LimitMarks<'_> {
         if self.first || !self.skim {
             return 0;
         }
-        let (tiles, start) = self.tiles;
-        let (ga, gb) = (start + a, start + b);
+        let (ga, gb) = (self.start + a, self.start + b);
         let since = self.pass - 1;
-        let moved = |lane: usize| tiles[lane / TILE_LANES].load(Ordering::Relaxed) >= since;
+        let moved = |lane: usize| self.tiles[lane / TILE_LANES].load(Ordering::Relaxed) >= since;
         if moved(ga) || moved(gb) {
             return 0;
         }
@@ -1570,7 +1571,8 @@ impl LimitMarks<'_> {
     ///
     /// # Safety
     /// `a + M` and `b + M` are at most the length of the marks, of `rest`
-    /// and of the view.
+    /// and of the view, and the tiles hold the region's lanes (checked once
+    /// a region by `limit_runs`).
     #[inline(always)]
     unsafe fn limit<const M: usize, const PLANES: bool>(
         &mut self,
@@ -1585,17 +1587,19 @@ impl LimitMarks<'_> {
             if !self.due::<M>((a, b)) {
                 return None;
             }
-            let tally = limit_chunk::<M, PLANES>((a, b), keep, rest, lanes, (factor, self.planes));
+            let planes = self.planes.map(|p| (p, self.start));
+            let tally = limit_chunk::<M, PLANES>((a, b), keep, rest, lanes, (factor, planes));
             if tally.shortened > 0 {
                 // The run's lanes only: a lane past it marked moved would
                 // make springs there due for nothing, pass after pass.
                 let len = keep.map_or(M, |k| k.iter().take_while(|&&kept| !kept).count());
                 self.moved.get_unchecked_mut(a..a + len).fill(self.pass);
                 self.moved.get_unchecked_mut(b..b + len).fill(self.pass);
-                let (tiles, start) = self.tiles;
+                // A run of at most `M` lanes meets at most two tiles: those
+                // of its ends.
                 for lane in [a, a + len - 1, b, b + len - 1] {
-                    tiles
-                        .get_unchecked((start + lane) / TILE_LANES)
+                    self.tiles
+                        .get_unchecked((self.start + lane) / TILE_LANES)
                         .store(self.pass, Ordering::Relaxed);
                 }
             }
@@ -1621,9 +1625,14 @@ fn limit_runs<const PLANES: bool>(
         rest.len() == lanes_len && marks.moved.len() == lanes_len,
         "rest lengths and marks for each lane"
     );
-    if let Some((planes, first)) = marks.planes {
+    let end = marks.start + lanes_len;
+    assert!(
+        end.div_ceil(TILE_LANES) <= marks.tiles.len(),
+        "tiles for each lane"
+    );
+    if let Some(planes) = marks.planes {
         assert!(
-            planes.whole() && first + lanes_len <= planes.lanes,
+            planes.whole() && end <= planes.lanes,
             "planes for each lane"
         );
     }
