@@ -2262,6 +2262,26 @@ mod tests {
         limit_stretch_with(plan, lanes, (factor, None), Team::ALONE, (simd, false))
     }
 
+    /// A call of the limit with `factor` on `setup()`'s lanes, with the
+    /// portable kernel and with AVX2 where the CPU has it, shortens
+    /// `shortened` springs and leaves the bits of `reference`; `then` looks
+    /// further at each kernel's plan and outcome.
+    fn each_kernel_limits_as(
+        setup: impl Fn() -> (GridPlan, Lanes),
+        factor: f32,
+        (reference, shortened): (&mut Lanes, u32),
+        mut then: impl FnMut(&mut GridPlan, LimitOutcome, bool),
+    ) {
+        let reference = bits(reference);
+        for simd in [false, simd_available()] {
+            let (mut plan, mut lanes) = setup();
+            let outcome = limit_with_simd(&mut plan, &mut lanes, factor, simd);
+            assert_eq!(outcome.shortened, shortened);
+            assert_eq!(bits(&mut lanes), reference);
+            then(&mut plan, outcome, simd);
+        }
+    }
+
     /// The stretch limit as it was written first, one spring at a time.
     fn limit_one_by_one(plan: &GridPlan, lanes: &mut Lanes, factor: f32) -> u32 {
         limit_one_by_one_with(plan, lanes, factor, Spans::Pairs)
@@ -2348,12 +2368,7 @@ mod tests {
         let (plan, mut reference) = stretched();
         let shortened = limit_one_by_one(&plan, &mut reference, 1.02);
         assert!(shortened > 50, "only {shortened} springs over the limit");
-        for simd in [false, simd_available()] {
-            let (mut plan, mut lanes) = stretched();
-            let n = limit_with_simd(&mut plan, &mut lanes, 1.02, simd).shortened;
-            assert_eq!(n, shortened);
-            assert_eq!(bits(&mut lanes), bits(&mut reference));
-        }
+        each_kernel_limits_as(stretched, 1.02, (&mut reference, shortened), |_, _, _| {});
     }
 
     /// A limit that moves a few springs in a large grid passes over most
@@ -2372,11 +2387,7 @@ mod tests {
         let (plan, mut reference) = pulled();
         let shortened = limit_one_by_one(&plan, &mut reference, 1.02);
         assert!(shortened > 20, "only {shortened} springs over the limit");
-        for simd in [false, simd_available()] {
-            let (mut plan, mut lanes) = pulled();
-            let n = limit_with_simd(&mut plan, &mut lanes, 1.02, simd).shortened;
-            assert_eq!(n, shortened);
-            assert_eq!(bits(&mut lanes), bits(&mut reference));
+        each_kernel_limits_as(pulled, 1.02, (&mut reference, shortened), |plan, _, _| {
             let tiles = &plan.limit_tiles.0;
             let unmoved = tiles
                 .iter()
@@ -2387,7 +2398,7 @@ mod tests {
                 "{unmoved} of {} tiles unmoved",
                 tiles.len()
             );
-        }
+        });
     }
 
     /// After an unsettled call the limit holds the long spans in place of
@@ -2424,13 +2435,14 @@ mod tests {
         limit_one_by_one_with(&plan_pairs, &mut pairs, 1.02, Spans::Pairs);
         assert_ne!(bits(&mut pairs), bits(&mut reference), "the spans held");
         assert!(shortened > 50, "only {shortened} springs over the limit");
-        for simd in [false, simd_available()] {
-            let (mut plan, mut lanes) = stretched();
-            let outcome = limit_with_simd(&mut plan, &mut lanes, 1.02, simd);
-            assert_eq!(outcome.shortened, shortened);
-            assert_eq!(bits(&mut lanes), bits(&mut reference));
-            assert_eq!(plan.limit_unsettled, outcome.unsettled);
-        }
+        each_kernel_limits_as(
+            stretched,
+            1.02,
+            (&mut reference, shortened),
+            |plan, outcome, _| {
+                assert_eq!(plan.limit_unsettled, outcome.unsettled);
+            },
+        );
     }
 
     /// A cloth of several bands of rows stretched at one end only: after
@@ -2452,35 +2464,37 @@ mod tests {
         let (plan, mut reference) = stretched();
         let shortened = limit_one_by_one(&plan, &mut reference, 1.02);
         assert!(shortened > 20, "only {shortened} springs over the limit");
-        for simd in [false, simd_available()] {
-            let (mut plan, mut lanes) = stretched();
-            let outcome = limit_with_simd(&mut plan, &mut lanes, 1.02, simd);
-            assert_eq!(outcome.shortened, shortened);
-            assert_eq!(bits(&mut lanes), bits(&mut reference));
-            // Some region was passed over whole in the later passes: its
-            // marks are all 0 (unmoved in every pass).
-            let untouched = plan.phases[0]
-                .iter()
-                .filter(|r| plan.limit_moved[r.lanes.clone()].iter().all(|&m| m == 0))
-                .count();
-            assert!(untouched > 0, "every region moved");
-            // Calls again on the same plan: their marks above the first
-            // call's (never filled), and once with the base come round
-            // (the marks filled then): the same bits.
-            for base in [None, Some(u32::MAX - LIMIT_PASSES)] {
-                let (_, mut again) = stretched();
-                if let Some(base) = base {
-                    plan.limit_base = base;
+        let reference_bits = bits(&mut reference);
+        each_kernel_limits_as(
+            stretched,
+            1.02,
+            (&mut reference, shortened),
+            |plan, _, simd| {
+                // Some region was passed over whole in the later passes: its
+                // marks are all 0 (unmoved in every pass).
+                let untouched = plan.phases[0]
+                    .iter()
+                    .filter(|r| plan.limit_moved[r.lanes.clone()].iter().all(|&m| m == 0))
+                    .count();
+                assert!(untouched > 0, "every region moved");
+                // Calls again on the same plan: their marks above the first
+                // call's (never filled), and once with the base come round
+                // (the marks filled then): the same bits.
+                for base in [None, Some(u32::MAX - LIMIT_PASSES)] {
+                    let (_, mut again) = stretched();
+                    if let Some(base) = base {
+                        plan.limit_base = base;
+                    }
+                    // As a step's first call: with the pairs, whatever the
+                    // call before ended with.
+                    plan.forget_unsettled();
+                    let outcome = limit_with_simd(plan, &mut again, 1.02, simd);
+                    assert_eq!(outcome.shortened, shortened);
+                    assert_eq!(bits(&mut again), reference_bits);
                 }
-                // As a step's first call: with the pairs, whatever the
-                // call before ended with.
-                plan.forget_unsettled();
-                let outcome = limit_with_simd(&mut plan, &mut again, 1.02, simd);
-                assert_eq!(outcome.shortened, shortened);
-                assert_eq!(bits(&mut again), bits(&mut reference));
-            }
-            assert_eq!(plan.limit_base, LIMIT_PASSES, "the base came round");
-        }
+                assert_eq!(plan.limit_base, LIMIT_PASSES, "the base came round");
+            },
+        );
     }
 
     /// Each pair of stretch springs along a row or a column is held to the
