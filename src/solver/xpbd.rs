@@ -21,7 +21,9 @@
 //! substep, and the state (positions, velocities) stays in the lanes from
 //! one substep to the next, one's end and the next one's prediction in one
 //! pass (`lane_motion.rs`), with the bits of the round trip through the
-//! particles' arrays.
+//! particles' arrays. Where it cannot stay (wind, self-collision, the
+//! step's last substep), the prediction into the lanes and the way back
+//! into the particles' arrays are passes of `lane_motion.rs` too.
 //!
 //! A substep of `h` seconds: predict `v += h (g − drag v + f_wind / m)`,
 //! `x += h v`; for each spring, `C = |x_b − x_a| − L`, `α = 1/(k h²)`,
@@ -49,7 +51,7 @@ use super::grid_sweep::{
     limit_stretch, limit_stretch_again, sweep, Compliance, GridPlan, KindInSweep, LanePlanes, Lanes,
 };
 use super::lane_contacts::{Holding, LaneContacts};
-use super::lane_motion::{self, Motion};
+use super::lane_motion::{self, BandEnd, BandParticles, Motion};
 use super::settings::SolverSettings;
 use super::strain_limit;
 use super::strain_limit::LimitScratch;
@@ -257,34 +259,23 @@ pub(crate) fn step(
                             [vx, vy, vz].map(|s| s.range(band.clone())),
                         )
                     };
-                    let (lanes, w) = (lanes_of_band, &model.inv_mass[band.clone()]);
-                    // One length for all, so that each index is checked once.
-                    let len = band.len();
-                    assert!([x.len(), v.len(), lanes.len(), w.len()] == [len; 4]);
-                    assert!(
-                        [lx.len(), ly.len(), lz.len(), sx.len(), sy.len(), sz.len()] == [len; 6]
-                    );
-                    assert!([lw.len(), vx.len(), vy.len(), vz.len()] == [len; 4]);
-                    // Eight running maxima, not one: one was a chain of
-                    // dependent `max`es, a sixth of the frame at N = 128.
-                    let mut fast2 = [0.0f32; 8];
-                    for k in 0..len {
-                        // In registers: reading `v[k]` back after its store
-                        // (three narrow stores, one wide load) stalled the
-                        // loop on store forwarding.
-                        let (start, mut p, mut vk) = (x[k], x[k], v[k]);
-                        predict(model, wind, band.start + k, (&mut p, &mut vk), h);
-                        (x[k], v[k]) = (p, vk);
-                        let lane = lanes[k] as usize - band.start;
-                        (lx[lane], ly[lane], lz[lane]) = (p.x, p.y, p.z);
-                        (sx[lane], sy[lane], sz[lane]) = (start.x, start.y, start.z);
-                        lw[lane] = w[k];
-                        if may_stay {
-                            (vx[lane], vy[lane], vz[lane]) = (vk.x, vk.y, vk.z);
-                        }
-                        fast2[k % 8] = fast2[k % 8].max(vk.length_squared());
-                    }
-                    let fast2 = fast2.into_iter().fold(0.0, f32::max);
+                    let particles = BandParticles {
+                        x,
+                        v,
+                        w: &model.inv_mass[band.clone()],
+                        wind: wind.map(|f| &f[band.clone()]),
+                        lane: lanes_of_band,
+                        first_lane: band.start,
+                    };
+                    let motion = Motion {
+                        gravity: model.gravity,
+                        drag: model.air_drag,
+                        h,
+                    };
+                    let lanes = [lx, ly, lz, sx, sy, sz, lw];
+                    let velocities = may_stay.then_some([vx, vy, vz]);
+                    let fast2 =
+                        lane_motion::predict_into_lanes(particles, lanes, velocities, motion);
                     fastest.fetch_max(fast2.to_bits(), Ordering::Relaxed);
                 });
             }
@@ -409,32 +400,21 @@ pub(crate) fn step(
                 );
                 plan.for_each_band(team, |band| {
                     // SAFETY: as above.
-                    let ([x, v, x_prev], [lx, ly, lz, sx, sy, sz, _], [vx, vy, vz]) = unsafe {
+                    let ([x, v, x_prev], state) = unsafe {
                         (
                             [xs, vs, ps].map(|s| s.range(band.clone())),
-                            lanes.map(|s| s.range(band.clone())),
-                            [vx, vy, vz].map(|s| s.range(band.clone())),
+                            band_state(lanes, [vx, vy, vz], band.clone()),
                         )
                     };
-                    let (lanes, w) = (plan.lanes_of(&band), &model.inv_mass[band.clone()]);
-                    let len = band.len();
-                    assert!([x.len(), v.len(), x_prev.len(), lanes.len(), w.len()] == [len; 5]);
-                    assert!(
-                        [lx.len(), ly.len(), lz.len(), sx.len(), sy.len(), sz.len()] == [len; 6]
-                    );
-                    assert!([vx.len(), vy.len(), vz.len()] == [len; 3]);
-                    for k in 0..len {
-                        let lane = lanes[k] as usize - band.start;
-                        let swept = Vector::new(lx[lane], ly[lane], lz[lane]);
-                        if resident {
-                            let start = Vector::new(sx[lane], sy[lane], sz[lane]);
-                            v[k] = Vector::new(vx[lane], vy[lane], vz[lane]);
-                            x[k] = start + v[k] * h;
-                            x_prev[k] = start;
-                        }
-                        correct_velocity(&mut v[k], swept - x[k], w[k], h);
-                        x[k] = swept;
-                    }
+                    let end = BandEnd {
+                        x,
+                        v,
+                        x_prev,
+                        w: &model.inv_mass[band.clone()],
+                        lane: plan.lanes_of(&band),
+                        first_lane: band.start,
+                    };
+                    lane_motion::lanes_into_particles(end, (state.0, state.1), resident, h);
                 });
             }
             XpbdOutcome {
