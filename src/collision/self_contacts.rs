@@ -552,6 +552,7 @@ struct Facing<'a> {
 impl Look<'_> {
     /// Triangle `t` as the look tests particles against it; none for a
     /// triangle of no area.
+    #[inline(always)]
     fn facing<'n>(&self, t: usize, neighbours: &'n MeshNeighbours) -> Option<Facing<'n>> {
         let (x, tri) = (self.x, self.topology.triangles[t]);
         let [a, b, c] = tri.map(|i| x[i as usize]);
@@ -623,12 +624,14 @@ impl Look<'_> {
         cand: &mut Candidates,
         out: &mut Vec<SelfPair>,
     ) {
-        let faces: [Option<Facing>; RUN] = std::array::from_fn(|k| {
-            let t = ts.start + k;
-            (t < ts.end && !skip(t))
-                .then(|| self.facing(t, neighbours))
-                .flatten()
-        });
+        // Each built in its place (built apart and moved in, a run's
+        // triangles were two copies each of a `Facing`).
+        let mut faces: [Option<Facing>; RUN] = [const { None }; RUN];
+        for (face, t) in faces.iter_mut().zip(ts.clone()) {
+            if !skip(t) {
+                *face = self.facing(t, neighbours);
+            }
+        }
         let (mut lo, mut hi) = (Vector::INFINITY, Vector::NEG_INFINITY);
         let mut widest = Vector::ZERO;
         for f in faces.iter().flatten() {
