@@ -504,10 +504,21 @@ impl Candidates {
         hash.for_each_inside(lo, hi, |p, _| self.p.push(p));
         self.len = self.p.len();
         let padded = self.len.next_multiple_of(LANES);
-        for (a, coordinate) in self.x.iter_mut().enumerate() {
+        for coordinate in &mut self.x {
             coordinate.clear();
-            coordinate.extend(self.p.iter().map(|&p| x[p as usize][a]));
             coordinate.resize(padded, f32::NAN);
+        }
+        // One pass for the three coordinates (one each, by `extend`, read
+        // each position three times).
+        let [cx, cy, cz] = &mut self.x;
+        let (cx, cy, cz) = (
+            &mut cx[..self.len],
+            &mut cy[..self.len],
+            &mut cz[..self.len],
+        );
+        for (k, &p) in self.p.iter().enumerate() {
+            let at = x[p as usize];
+            (cx[k], cy[k], cz[k]) = (at.x, at.y, at.z);
         }
         self.p.resize(padded, u32::MAX);
     }

@@ -73,14 +73,22 @@ impl SpatialHash {
             self.start[b] -= 1;
             self.entries[self.start[b] as usize] = i as u32;
         }
-        for a in 0..3 {
-            let (cells, coordinates) = (&mut self.entry_cells[a], &mut self.entry_points[a]);
+        for (cells, coordinates) in self.entry_cells.iter_mut().zip(&mut self.entry_points) {
             cells.clear();
-            cells.extend(self.entries.iter().map(|&i| self.cells[i as usize][a]));
             cells.resize(n + PAD, 0);
             coordinates.clear();
-            coordinates.extend(self.entries.iter().map(|&i| points[i as usize][a]));
             coordinates.resize(n + PAD, 0.0);
+        }
+        // One pass over the entries for all six arrays (a pass each, by
+        // `extend`, read each point's cell and position six times).
+        let [cx, cy, cz] = &mut self.entry_cells;
+        let [px, py, pz] = &mut self.entry_points;
+        let (cx, cy, cz) = (&mut cx[..n], &mut cy[..n], &mut cz[..n]);
+        let (px, py, pz) = (&mut px[..n], &mut py[..n], &mut pz[..n]);
+        for (k, &i) in self.entries.iter().enumerate() {
+            let (c, p) = (self.cells[i as usize], points[i as usize]);
+            (cx[k], cy[k], cz[k]) = (c[0], c[1], c[2]);
+            (px[k], py[k], pz[k]) = (p.x, p.y, p.z);
         }
         self.simd = simd_available();
     }
