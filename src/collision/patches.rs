@@ -12,13 +12,16 @@
 //! patches of two pieces are quiet only while out of each other's reach.
 
 use crate::cloth::GridPiece;
-use crate::math::Vector;
+use crate::math::{simd_available, Vector};
 
 /// Cells along a patch's side, at least: small enough that a wrinkled
 /// skirt still has quiet patches (8 left the drape's none), and as many
 /// more as keep the patches at most [`MAX_ACROSS`] along a side (the
 /// patches' boxes are compared pairwise).
 const PATCH: usize = 4;
+
+/// Boxes a vector step of [`Patches::all_meeting`] tests at once.
+const LANES: usize = 8;
 
 /// Patches along a side of a grid, at most.
 const MAX_ACROSS: usize = 16;
@@ -90,6 +93,10 @@ pub(crate) struct Patches {
     /// Per patch: the widest angle (radians) between a triangle's normal
     /// and the patch's axis.
     spread: Vec<f32>,
+    /// The patches' boxes coordinate by coordinate (`lo` x, y, z, then
+    /// `hi`), padded to whole vector steps with boxes that meet none, for
+    /// [`Patches::all_meeting`] eight at a time.
+    boxes: [Vec<f32>; 6],
     /// Per patch: true when its triangles need no look.
     quiet: Vec<bool>,
     /// Per triangle of the cloth: its patch's `quiet` (false in no patch).
@@ -196,6 +203,17 @@ impl Patches {
         }
         self.quiet.clear();
         let pad = Vector::splat(reach);
+        let padded = count.next_multiple_of(LANES);
+        for (a, b) in self.boxes.iter_mut().enumerate() {
+            let (corners, none) = if a < 3 {
+                (&self.lo, f32::INFINITY)
+            } else {
+                (&self.hi, f32::NEG_INFINITY)
+            };
+            b.clear();
+            b.extend(corners.iter().map(|c| c[a % 3]));
+            b.resize(padded, none);
+        }
         for piece in &self.pieces {
             for k in piece.patches() {
                 let local = k - piece.first_patch;
@@ -203,12 +221,7 @@ impl Patches {
                 // Patches of other pieces must be out of reach; of this
                 // one, out of reach or a neighbour on one sheet with it.
                 let quiet = self.spread[k] < MAX_CONE
-                    && (0..count).filter(|&m| m != k).all(|m| {
-                        let apart = (self.lo[k] - pad).cmpgt(self.hi[m]).any()
-                            || (self.hi[k] + pad).cmplt(self.lo[m]).any();
-                        if apart {
-                            return true;
-                        }
+                    && self.all_meeting(k, pad, |m| {
                         if !piece.patches().contains(&m) {
                             return false;
                         }
@@ -267,6 +280,82 @@ impl Patches {
                 .iter()
                 .all(|&cc| self.quiet[piece.patch_at(cc / piece.side, cr / piece.side)])
         })
+    }
+
+    /// True when `f` holds for every other patch whose box meets patch
+    /// `k`'s padded by `pad` (m), asked in ascending order until one fails
+    /// (ordered tests: a box that is not a number meets every other). Eight
+    /// boxes at a time where the CPU has AVX2: the tests were most of an
+    /// update of the `fold`'s 144 patches, a pair at a time.
+    fn all_meeting(&self, k: usize, pad: Vector, mut f: impl FnMut(usize) -> bool) -> bool {
+        let (lo, hi) = (self.lo[k] - pad, self.hi[k] + pad);
+        #[cfg(target_arch = "x86_64")]
+        if simd_available() {
+            // SAFETY: only where the CPU has AVX2.
+            return unsafe { self.all_meeting_avx2(k, (lo, hi), &mut f) };
+        }
+        self.all_meeting_portable(k, (lo, hi), f)
+    }
+
+    /// [`Patches::all_meeting`] a pair at a time, for the padded box
+    /// `lo..hi`.
+    fn all_meeting_portable(
+        &self,
+        k: usize,
+        (lo, hi): (Vector, Vector),
+        mut f: impl FnMut(usize) -> bool,
+    ) -> bool {
+        (0..self.lo.len()).all(|m| {
+            let apart = lo.cmpgt(self.hi[m]).any() || hi.cmplt(self.lo[m]).any();
+            apart || m == k || f(m)
+        })
+    }
+
+    /// [`Patches::all_meeting`] with AVX2, for the padded box `lo..hi`.
+    ///
+    /// # Safety
+    /// The CPU has AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn all_meeting_avx2(
+        &self,
+        k: usize,
+        (lo, hi): (Vector, Vector),
+        f: &mut impl FnMut(usize) -> bool,
+    ) -> bool {
+        use std::arch::x86_64::*;
+        let count = self.lo.len();
+        let [lx, ly, lz, hx, hy, hz] = &self.boxes;
+        let padded = lx.len();
+        assert!(
+            padded >= count && [ly, lz, hx, hy, hz].iter().all(|b| b.len() == padded),
+            "the boxes padded to whole steps"
+        );
+        let splat = |v: Vector| [v.x, v.y, v.z].map(|c| _mm256_set1_ps(c));
+        let (lo, hi) = (splat(lo), splat(hi));
+        for first in (0..padded).step_by(LANES) {
+            // SAFETY: lanes first..first + 8 are in every padded array.
+            let at = |b: &Vec<f32>| _mm256_loadu_ps(b.as_ptr().add(first));
+            let apart = [
+                _mm256_cmp_ps::<_CMP_GT_OQ>(lo[0], at(hx)),
+                _mm256_cmp_ps::<_CMP_GT_OQ>(lo[1], at(hy)),
+                _mm256_cmp_ps::<_CMP_GT_OQ>(lo[2], at(hz)),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(hi[0], at(lx)),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(hi[1], at(ly)),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(hi[2], at(lz)),
+            ]
+            .into_iter()
+            .fold(_mm256_setzero_ps(), |any, a| _mm256_or_ps(any, a));
+            let mut meets = !_mm256_movemask_ps(apart) as u32 & 0xff;
+            while meets != 0 {
+                let m = first + meets.trailing_zeros() as usize;
+                meets &= meets - 1;
+                if m < count && m != k && !f(m) {
+                    return false;
+                }
+            }
+        }
+        true
     }
 
     /// True when the patches of `piece` from column and row `from` to `to`
@@ -344,6 +433,79 @@ mod tests {
         // Off a grid, nothing is quiet.
         patches.update(cloth.positions(), std::iter::empty(), &triangles, 0.02);
         assert!(!patches.quiet_triangle(0));
+    }
+
+    /// A crumpled cloth's patches (and one whose box is not a number):
+    /// the boxes each patch's meets, and where the asking stops, are the
+    /// same eight at a time as a pair at a time.
+    #[test]
+    fn the_boxes_meet_the_same_eight_at_a_time_as_one_at_a_time() {
+        let mut cloth = ClothBuilder::new(41, 37).size(1.0, 0.9).build().unwrap();
+        for i in 0..cloth.particle_count() {
+            let p = cloth.positions()[i];
+            let t = i as f32 * 0.37;
+            let crumpled = p + Vector::new(
+                0.05 * t.sin(),
+                0.3 * (3.0 * p.x).sin() * p.z,
+                0.04 * t.cos(),
+            );
+            cloth.set_position(i, crumpled).unwrap();
+        }
+        let mut x = cloth.positions().to_vec();
+        x[cloth.index(20, 20).unwrap()] = Vector::splat(f32::NAN);
+        let triangles = cloth.triangles().to_vec();
+        let mut patches = Patches::default();
+        patches.update(&x, cloth.topology().grid_pieces(), &triangles, 0.02);
+        let count = patches.lo.len();
+        assert!(
+            count > LANES + 1 && !count.is_multiple_of(LANES),
+            "{count} patches"
+        );
+        // A box that is not a number (a patch lost entirely).
+        let nan = Vector::splat(f32::NAN);
+        (patches.lo[3], patches.hi[3]) = (nan, nan);
+        for b in &mut patches.boxes {
+            b[3] = f32::NAN;
+        }
+        let pad = Vector::splat(0.02);
+        let (mut met, mut lonely) = (0, 0);
+        for k in 0..count {
+            let boxed = (patches.lo[k] - pad, patches.hi[k] + pad);
+            let mut one = Vec::new();
+            assert!(patches.all_meeting_portable(k, boxed, |m| {
+                one.push(m);
+                true
+            }));
+            let mut eight = Vec::new();
+            assert!(patches.all_meeting(k, pad, |m| {
+                eight.push(m);
+                true
+            }));
+            assert_eq!(one, eight, "patch {k}");
+            assert!(!one.contains(&k));
+            // Stopped at the third: the same three asked.
+            let (mut a, mut b) = (0, 0);
+            let stop_one = patches.all_meeting_portable(k, boxed, |_| {
+                a += 1;
+                a < 3
+            });
+            let stop_eight = patches.all_meeting(k, pad, |_| {
+                b += 1;
+                b < 3
+            });
+            assert_eq!((stop_one, a), (stop_eight, b));
+            met += one.len();
+            lonely += usize::from(one.len() < count - 1);
+            if k == 3 {
+                assert_eq!(one.len(), count - 1, "a box not a number meets every other");
+            } else {
+                assert!(one.contains(&3));
+            }
+        }
+        assert!(
+            met > count && lonely > 0,
+            "{met} meetings, {lonely} apart from some"
+        );
     }
 
     /// Cloths joined into one are patched piece by piece: two flat pieces
