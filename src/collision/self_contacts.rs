@@ -574,13 +574,15 @@ impl Look<'_> {
             return None;
         }
         let (n, reach) = (normal / area2, self.reach);
-        let rim = rim(self.thickness, (e1, e2));
+        let edges = edge_lengths((e1, e2));
+        let rim = rim(self.thickness, edges);
         // A particle may slide `margin` towards the triangle before the next
         // look: accept projections that far outside.
-        let slack = rim_slack(self.margin + rim, (e1, e2), area2);
+        let slack = rim_slack(self.margin + rim, edges, area2);
         // Particles of the same smooth sheet as the triangle, up to as far as
         // a pair can reach from its corners, are left to the springs.
-        let sheet = neighbours.sheet(tri, reach + rim + e1.length().max(e2.length()));
+        let [_, ac, ab] = edges;
+        let sheet = neighbours.sheet(tri, reach + rim + ab.max(ac));
         let pad = Vector::splat(reach);
         Some(Facing {
             t: t as u32,
@@ -1391,10 +1393,19 @@ impl Near {
     fn rim_slack(&mut self, thickness: f32) -> Option<(f32, [f32; 3])> {
         *self.slack.get_or_insert_with(|| {
             let len = self.len2.sqrt();
-            let edges = (self.e1, self.e2);
+            let edges = edge_lengths((self.e1, self.e2));
             is_positive(len).then(|| (len, rim_slack(rim(thickness, edges), edges, len)))
         })
     }
+}
+
+/// The lengths (m) of a triangle's edges opposite its corners a, b and c,
+/// from its edges `e1 = b − a` and `e2 = c − a`: `|e2 − e1|`, `|e2|`,
+/// `|e1|` (three roots a triangle, shared by [`rim`], [`rim_slack`] and a
+/// look's sheet).
+#[inline]
+fn edge_lengths((e1, e2): (Vector, Vector)) -> [f32; 3] {
+    [(e2 - e1).length(), e2.length(), e1.length()]
 }
 
 /// How far outside each edge of a triangle a particle is still taken, in
@@ -1402,25 +1413,23 @@ impl Near {
 /// beyond every edge, over the altitude onto that edge. Where the cloth
 /// bends, the projections of a particle near the common edge may fall
 /// outside both triangles (a gap a particle slipped through in the `fold`
-/// scene); a rim closes it. `len` is `|e1 × e2|`, twice the area.
+/// scene); a rim closes it. `len` is `|e1 × e2|`, twice the area, and
+/// `edges` the edges' lengths ([`edge_lengths`]).
 #[inline]
-fn rim_slack(out: f32, (e1, e2): (Vector, Vector), len: f32) -> [f32; 3] {
+fn rim_slack(out: f32, edges: [f32; 3], len: f32) -> [f32; 3] {
     // The altitude onto an edge is `len / |edge|`; u belongs to corner a,
     // whose opposite edge is `e2 − e1`.
-    [(e2 - e1).length(), e2.length(), e1.length()].map(|edge| out * edge / len)
+    edges.map(|edge| out * edge / len)
 }
 
 /// The rim of a triangle (m): the thickness, but at most a quarter of its
 /// shortest edge, so that the particles beyond the rest-mesh neighbours of
-/// a flat cloth never fall within it.
+/// a flat cloth never fall within it. `edges` are the edges' lengths
+/// ([`edge_lengths`]; the least of the roots is the root of the least
+/// square, to the bit, roots being rounded correctly).
 #[inline]
-fn rim(thickness: f32, (e1, e2): (Vector, Vector)) -> f32 {
-    let shortest = e1
-        .length_squared()
-        .min(e2.length_squared())
-        .min((e2 - e1).length_squared())
-        .sqrt();
-    thickness.min(0.25 * shortest)
+fn rim(thickness: f32, [bc, ac, ab]: [f32; 3]) -> f32 {
+    thickness.min(0.25 * ab.min(ac).min(bc))
 }
 
 /// Barycentric coordinates clamped to the triangle and summing to one.
