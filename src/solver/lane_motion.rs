@@ -355,35 +355,35 @@ fn predict_eight_portable(
 ) {
     let len = range.len();
     let k = range.start;
-    let mut e = Predicted::default();
+    let mut p8 = Predicted::default();
     for j in 0..len {
-        (e.start[0][j], e.start[1][j], e.start[2][j]) = p.x[k + j].into();
-        (e.v[0][j], e.v[1][j], e.v[2][j]) = p.v[k + j].into();
-        e.w[j] = p.w[k + j];
+        (p8.e.start[0][j], p8.e.start[1][j], p8.e.start[2][j]) = p.x[k + j].into();
+        (p8.e.v[0][j], p8.e.v[1][j], p8.e.v[2][j]) = p.v[k + j].into();
+        p8.e.w[j] = p.w[k + j];
     }
     match p.wind {
         Some(wind) => {
             for j in 0..len {
-                (e.wind[0][j], e.wind[1][j], e.wind[2][j]) = wind[k + j].into();
+                (p8.wind[0][j], p8.wind[1][j], p8.wind[2][j]) = wind[k + j].into();
             }
-            predict_eight::<true>(&mut e, m, fast2);
+            predict_eight::<true>(&mut p8, m, fast2);
         }
-        None => predict_eight::<false>(&mut e, m, fast2),
+        None => predict_eight::<false>(&mut p8, m, fast2),
     }
     for j in 0..len {
         let at = |a: &[[f32; W]; 3]| Vector::new(a[0][j], a[1][j], a[2][j]);
-        (p.x[k + j], p.v[k + j]) = (at(&e.x), at(&e.v));
+        (p.x[k + j], p.v[k + j]) = (at(&p8.e.x), at(&p8.e.v));
         // Lanes only reorder a row, so that a lane past the band is a
         // broken plan: the index check says so.
         let l = p.lane[k + j] as usize - p.first_lane;
         for a in 0..3 {
-            lanes[a][l] = e.x[a][j];
-            lanes[3 + a][l] = e.start[a][j];
+            lanes[a][l] = p8.e.x[a][j];
+            lanes[3 + a][l] = p8.e.start[a][j];
         }
-        lanes[6][l] = e.w[j];
+        lanes[6][l] = p8.e.w[j];
         if let Some(v) = velocities {
             for a in 0..3 {
-                v[a][l] = e.v[a][j];
+                v[a][l] = p8.e.v[a][j];
             }
         }
     }
@@ -483,14 +483,12 @@ unsafe fn swept_avx2(p: &mut BandEnd, swept: [&[f32]; 3], h: f32) -> usize {
 }
 
 /// Eight particles in registers for the prediction: positions (m, after
-/// it), starts (m), velocities (m/s), inverse masses (1/kg) and the wind's
-/// forces (N); zeros (a pinned particle at rest) by default.
+/// it), starts (m), velocities (m/s) and inverse masses (1/kg) as
+/// [`Eight`] holds lanes, and the wind's forces (N); zeros (a pinned
+/// particle at rest) by default.
 #[derive(Default, Clone, Copy)]
 struct Predicted {
-    x: [[f32; W]; 3],
-    start: [[f32; W]; 3],
-    v: [[f32; W]; 3],
-    w: [f32; W],
+    e: Eight,
     wind: [[f32; W]; 3],
 }
 
@@ -498,20 +496,20 @@ struct Predicted {
 /// in its operations' order; keeps in `fast2` the largest squared speed of
 /// each.
 #[inline(always)]
-fn predict_eight<const WIND: bool>(e: &mut Predicted, m: Motion, fast2: &mut [f32; W]) {
+fn predict_eight<const WIND: bool>(p8: &mut Predicted, m: Motion, fast2: &mut [f32; W]) {
     let (g, h) = (m.gravity.to_array(), m.h);
     for k in 0..W {
-        let free = e.w[k] != 0.0;
+        let free = p8.e.w[k] != 0.0;
         let mut speed2 = 0.0;
         for a in 0..3 {
-            let v = e.v[a][k];
+            let v = p8.e.v[a][k];
             let mut acc = g[a] - v * m.drag;
             if WIND {
-                acc += e.wind[a][k] * e.w[k];
+                acc += p8.wind[a][k] * p8.e.w[k];
             }
             let v = if free { v + acc * h } else { v };
-            e.x[a][k] = e.start[a][k] + v * h;
-            e.v[a][k] = v;
+            p8.e.x[a][k] = p8.e.start[a][k] + v * h;
+            p8.e.v[a][k] = v;
             speed2 += v * v;
         }
         fast2[k] = fast2[k].max(speed2);
@@ -606,6 +604,30 @@ mod tests {
         };
         assert_eq!(bits(run(true)), bits(run(false)));
     }
+
+    /// `n` vectors of sines and cosines, from phase `s`.
+    fn jittered(n: usize, s: f32) -> Vec<Vector> {
+        (0..n)
+            .map(|i| {
+                let t = (i as f32 + s) * 0.731;
+                Vector::new(t.sin(), (1.3 * t).cos(), (0.7 * t).sin())
+            })
+            .collect()
+    }
+
+    /// `n` inverse masses (1/kg), every third pinned (0).
+    fn every_third_pinned(n: usize) -> Vec<f32> {
+        (0..n)
+            .map(|i| if i % 3 == 0 { 0.0 } else { 40.0 + i as f32 })
+            .collect()
+    }
+
+    /// Particle k's lane, `5 + (8 k mod n)`, of a band whose lanes start
+    /// at 5: another order, as a grid's row takes its particles.
+    fn shuffled_lanes(n: usize) -> Vec<u32> {
+        (0..n).map(|k| (5 + (k * 8) % n) as u32).collect()
+    }
+
     /// 21 particles (two steps and a tail), every third pinned, with
     /// their lanes in another order (as a grid's row takes them), predicted
     /// with wind or without and with velocity lanes or without: the
@@ -614,19 +636,8 @@ mod tests {
     #[test]
     fn the_prediction_moves_each_particle_as_predict_does_into_its_lane() {
         let n = 21;
-        let f = |s: f32| -> Vec<Vector> {
-            (0..n)
-                .map(|i| {
-                    let t = (i as f32 + s) * 0.731;
-                    Vector::new(t.sin(), (1.3 * t).cos(), (0.7 * t).sin())
-                })
-                .collect()
-        };
-        let w: Vec<f32> = (0..n)
-            .map(|i| if i % 3 == 0 { 0.0 } else { 40.0 + i as f32 })
-            .collect();
-        // Particle k in lane 5 + (k * 8) mod 21 of a band starting at lane 5.
-        let lane: Vec<u32> = (0..n).map(|k| (5 + (k * 8) % n) as u32).collect();
+        let (f, w) = (|s: f32| jittered(n, s), every_third_pinned(n));
+        let lane = shuffled_lanes(n);
         let motion = Motion {
             gravity: Vector::new(0.0, -9.81, 0.0),
             drag: 0.3,
@@ -696,6 +707,7 @@ mod tests {
             assert_eq!(fast2.to_bits(), fastest.to_bits());
         }
     }
+
     /// 21 particles (two steps and a tail), every third pinned, their
     /// lanes in another order: the end of a substep leaves each particle
     /// where its lane is, with the velocity `xpbd::correct_velocity` gives
@@ -703,18 +715,8 @@ mod tests {
     #[test]
     fn the_end_of_a_substep_takes_each_particle_from_its_lane() {
         let n = 21;
-        let f = |s: f32| -> Vec<Vector> {
-            (0..n)
-                .map(|i| {
-                    let t = (i as f32 + s) * 0.731;
-                    Vector::new(t.sin(), (1.3 * t).cos(), (0.7 * t).sin())
-                })
-                .collect()
-        };
-        let w: Vec<f32> = (0..n)
-            .map(|i| if i % 3 == 0 { 0.0 } else { 40.0 + i as f32 })
-            .collect();
-        let lane: Vec<u32> = (0..n).map(|k| (5 + (k * 8) % n) as u32).collect();
+        let (f, w) = (|s: f32| jittered(n, s), every_third_pinned(n));
+        let lane = shuffled_lanes(n);
         let h = 1.0 / 960.0;
         let (lanes0, velocities0) = band();
         for resident in [false, true] {
