@@ -2,7 +2,7 @@
 //! stays there between substeps (`xpbd.rs`): the end of one substep (each
 //! lane's velocity from its motion) and the prediction of the next (gravity
 //! and air drag, no wind), in one pass. Each lane takes the operations
-//! `xpbd::predict` and `xpbd::correct_velocity` make on a particle, in the
+//! `xpbd::predict` and [`correct_velocity`] make on a particle, in the
 //! same order, so the bits are those of the particles' own arrays.
 //!
 //! Also the prediction of a substep whose state does not stay in the
@@ -155,6 +155,17 @@ fn eight(e: &mut Eight, m: Motion, fast2: &mut [f32; W]) {
         fast2[k] = fast2[k].max(speed2);
     }
     *e = out;
+}
+
+/// The velocity at the end of a substep of `h` seconds: the predicted one
+/// plus what the sweeps moved the particle, over `h` (pinned particles keep
+/// theirs). Here, with the passes that take it lane by lane, so that the
+/// integrator (`xpbd.rs`) and they share one definition.
+#[inline(always)]
+pub(super) fn correct_velocity(v: &mut Vector, correction: Vector, inv_mass: f32, h: f32) {
+    if inv_mass != 0.0 {
+        *v += correction / h;
+    }
 }
 
 /// One band's particles as the prediction reads and writes them:
@@ -405,7 +416,7 @@ pub(super) struct BandEnd<'a> {
 /// Ends a substep on the particles of a band from their lanes (positions,
 /// starts, inverse masses and velocities, as [`BandState`]): each free
 /// particle's velocity gains what the sweeps moved it from where it was
-/// predicted to be, over `h` (`xpbd::correct_velocity`), and it goes where
+/// predicted to be, over `h` ([`correct_velocity`]), and it goes where
 /// its lane is. With `resident`, the particles' arrays hold the state of
 /// an earlier substep and the lanes this one's: each particle first takes
 /// its lane's start and velocity, and the prediction from them.
@@ -437,7 +448,7 @@ pub(super) fn lanes_into_particles(mut p: BandEnd, band: BandState, resident: bo
             p.x[k] = start + p.v[k] * h;
             p.x_prev[k] = start;
         }
-        super::xpbd::correct_velocity(&mut p.v[k], swept - p.x[k], p.w[k], h);
+        correct_velocity(&mut p.v[k], swept - p.x[k], p.w[k], h);
         p.x[k] = swept;
     }
 }
@@ -570,7 +581,7 @@ mod tests {
             // As the particles' path makes them: the end of the substep,
             // then the next prediction.
             let predicted = start + vel * h;
-            super::super::xpbd::correct_velocity(&mut vel, x - predicted, w, h);
+            correct_velocity(&mut vel, x - predicted, w, h);
             if w != 0.0 {
                 vel += (Vector::new(0.0, -9.81, 0.0) - vel * 0.3) * h;
             }
@@ -710,7 +721,7 @@ mod tests {
 
     /// 21 particles (two steps and a tail), every third pinned, their
     /// lanes in another order: the end of a substep leaves each particle
-    /// where its lane is, with the velocity `xpbd::correct_velocity` gives
+    /// where its lane is, with the velocity [`correct_velocity`] gives
     /// it, and with `resident` from the lane's start and velocity first.
     #[test]
     fn the_end_of_a_substep_takes_each_particle_from_its_lane() {
@@ -747,7 +758,7 @@ mod tests {
                     prev = start;
                 }
                 let swept = at(&lanes0, 0);
-                super::super::xpbd::correct_velocity(&mut vk, swept - xk, w[k], h);
+                correct_velocity(&mut vk, swept - xk, w[k], h);
                 let bits = |p: Vector| p.to_array().map(f32::to_bits);
                 assert_eq!(bits(x[k]), bits(swept), "particle {k} where its lane is");
                 assert_eq!(bits(v[k]), bits(vk), "particle {k}'s velocity");

@@ -51,7 +51,7 @@ use super::grid_sweep::{
     limit_stretch, limit_stretch_again, sweep, Compliance, GridPlan, KindInSweep, LanePlanes, Lanes,
 };
 use super::lane_contacts::{Holding, LaneContacts};
-use super::lane_motion::{self, BandEnd, BandParticles, Motion};
+use super::lane_motion::{self, correct_velocity, BandEnd, BandParticles, Motion};
 use super::settings::SolverSettings;
 use super::strain_limit;
 use super::strain_limit::LimitScratch;
@@ -577,15 +577,6 @@ fn predict(
         *v += a * h;
     }
     *x += *v * h;
-}
-
-/// The velocity at the end of a substep of `h` seconds: the predicted one
-/// plus what the sweeps moved the particle, over `h` (pinned particles keep theirs).
-#[inline(always)]
-pub(super) fn correct_velocity(v: &mut Vector, correction: Vector, inv_mass: f32, h: f32) {
-    if inv_mass != 0.0 {
-        *v += correction / h;
-    }
 }
 
 /// Planes per chunk of a pass over the contact planes, a chunk to a thread.
