@@ -240,6 +240,14 @@ pub(crate) fn step(
             let fastest = AtomicU32::new(0);
             let lanes = l.disjoint();
             let [vx, vy, vz] = vel.each_mut().map(|c| Disjoint::new(&mut c[..]));
+            // What moves a particle over the substep besides the springs
+            // and the wind: the prediction's, and the next one's where the
+            // state stays in the lanes.
+            let moves = Motion {
+                gravity: model.gravity,
+                drag: model.air_drag,
+                h,
+            };
             if let Some(fast2) = ahead {
                 // Predicted at the end of the last substep, the
                 // multipliers zeroed then.
@@ -252,11 +260,10 @@ pub(crate) fn step(
                 // The multipliers start the substep at zero, band by band too.
                 plan.for_each_band_from_zero(team, |band, lanes_of_band| {
                     // SAFETY: bands are disjoint ranges of particles and of lanes.
-                    let ([x, v], [lx, ly, lz, sx, sy, sz, lw], [vx, vy, vz]) = unsafe {
+                    let ([x, v], (band_lanes, velocities, _)) = unsafe {
                         (
                             [xs, vs].map(|s| s.range(band.clone())),
-                            lanes.map(|s| s.range(band.clone())),
-                            [vx, vy, vz].map(|s| s.range(band.clone())),
+                            band_state(lanes, [vx, vy, vz], band.clone()),
                         )
                     };
                     let particles = BandParticles {
@@ -267,15 +274,9 @@ pub(crate) fn step(
                         lane: lanes_of_band,
                         first_lane: band.start,
                     };
-                    let motion = Motion {
-                        gravity: model.gravity,
-                        drag: model.air_drag,
-                        h,
-                    };
-                    let lanes = [lx, ly, lz, sx, sy, sz, lw];
-                    let velocities = may_stay.then_some([vx, vy, vz]);
+                    let velocities = may_stay.then_some(velocities);
                     let fast2 =
-                        lane_motion::predict_into_lanes(particles, lanes, velocities, motion);
+                        lane_motion::predict_into_lanes(particles, band_lanes, velocities, moves);
                     fastest.fetch_max(fast2.to_bits(), Ordering::Relaxed);
                 });
             }
@@ -376,16 +377,11 @@ pub(crate) fn step(
                 // (no wind, the same step's gravity, drag and `h`) in one
                 // pass, and the multipliers zeroed for it: the state stays
                 // in the lanes and nothing else reads it between the two.
-                let motion = Motion {
-                    gravity: model.gravity,
-                    drag: model.air_drag,
-                    h,
-                };
                 let fastest = AtomicU32::new(0);
                 plan.for_each_band_from_zero(team, |band, _| {
                     // SAFETY: bands are disjoint ranges of lanes.
                     let (l, v, _) = unsafe { band_state(lanes, [vx, vy, vz], band) };
-                    let fast2 = lane_motion::correct_and_predict((l, v), motion);
+                    let fast2 = lane_motion::correct_and_predict((l, v), moves);
                     fastest.fetch_max(fast2.to_bits(), Ordering::Relaxed);
                 });
                 ws.resident = Some(fastest.into_inner());
@@ -400,7 +396,7 @@ pub(crate) fn step(
                 );
                 plan.for_each_band(team, |band| {
                     // SAFETY: as above.
-                    let ([x, v, x_prev], state) = unsafe {
+                    let ([x, v, x_prev], (band_lanes, velocities, _)) = unsafe {
                         (
                             [xs, vs, ps].map(|s| s.range(band.clone())),
                             band_state(lanes, [vx, vy, vz], band.clone()),
@@ -414,7 +410,7 @@ pub(crate) fn step(
                         lane: plan.lanes_of(&band),
                         first_lane: band.start,
                     };
-                    lane_motion::lanes_into_particles(end, (state.0, state.1), resident, h);
+                    lane_motion::lanes_into_particles(end, (band_lanes, velocities), resident, h);
                 });
             }
             XpbdOutcome {
