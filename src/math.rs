@@ -4,6 +4,13 @@
 
 pub use parry3d::math::{Pose, Real, Rotation, Vector};
 
+/// The `f32`s of a [`Vector`], which lie in a row (glam's `Vec3` is
+/// `repr(C)`): the AVX2 kernels that read and write arrays of vectors as
+/// arrays of `f32` (the lanes' motion, the self-collision pass and due
+/// test) count on it, and the build stops if it ever changes.
+pub(crate) const VECTOR_F32S: usize = 3;
+const _: () = assert!(std::mem::size_of::<Vector>() == VECTOR_F32S * std::mem::size_of::<f32>());
+
 /// True when the CPU has AVX2: the vectorised kernels (the grid sweep, the
 /// wind's lanes) then run their loops in 8-lane registers; without it the
 /// same loops run with the baseline's lanes and give the same bits.

@@ -54,7 +54,7 @@ use super::neighbours::{MeshNeighbours, Sheet};
 use super::patches::Patches;
 use super::spatial_hash::SpatialHash;
 use crate::cloth::{Particles, Topology};
-use crate::math::{simd_available, Vector};
+use crate::math::{simd_available, Vector, VECTOR_F32S};
 use crate::parallel::{Disjoint, Team};
 
 /// A particle near a triangle of its own cloth.
@@ -222,11 +222,10 @@ impl PairLanes {
         (thickness, margin): (f32, f32),
     ) -> usize {
         use std::arch::x86_64::*;
-        const STRIDE: usize = std::mem::size_of::<Vector>() / std::mem::size_of::<f32>();
         assert!(k + LANES <= self.p.len() && self.p.len() == self.side.len());
         assert!(self.corners.iter().all(|c| c.len() == self.p.len()));
         let base = x.ptr as *const f32;
-        let stride = _mm256_set1_epi32(STRIDE as i32);
+        let stride = _mm256_set1_epi32(VECTOR_F32S as i32);
         // SAFETY: `k + LANES` within the lanes (asserted); each index below
         // `x.len()` (the caller's promise), so each gather reads a
         // coordinate of a particle.
@@ -1477,9 +1476,6 @@ fn motion_box(x: &[Vector], at: &[Vector]) -> Option<(Vector, Vector)> {
     (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
 }
 
-// The AVX2 box reads a `Vector` as three `f32` in a row.
-const _: () = assert!(std::mem::size_of::<Vector>() == 3 * std::mem::size_of::<f32>());
-
 /// [`motion_box`] over the whole steps of eight particles: how many it
 /// took and their box; none where a motion is not a number (an infinite
 /// one the box shows).
@@ -1499,7 +1495,7 @@ unsafe fn motion_box_avx2(x: &[Vector], at: &[Vector]) -> Option<(usize, Vector,
         for r in 0..3 {
             // SAFETY: floats 24 step + 8 r .. + 8 are of particles 8 step
             // .. 8 step + 8, in both arrays.
-            let at = 24 * step + 8 * r;
+            let at = VECTOR_F32S * (8 * step) + 8 * r;
             let d = _mm256_sub_ps(_mm256_loadu_ps(xs.add(at)), _mm256_loadu_ps(ats.add(at)));
             nan = _mm256_or_ps(nan, _mm256_cmp_ps::<_CMP_UNORD_Q>(d, d));
             lo[r] = _mm256_min_ps(lo[r], d);

@@ -13,7 +13,7 @@
 //! AVX2 where the CPU has it: as one loop over lanes the pass stayed scalar
 //! (a tenth of the drape's frame at N = 128, perf, one thread).
 
-use crate::math::{simd_available, Vector};
+use crate::math::{simd_available, Vector, VECTOR_F32S};
 
 /// Lanes of one vector step (AVX2's eight `f32`).
 const W: usize = 8;
@@ -218,9 +218,6 @@ pub(super) fn predict_into_lanes(
     fast2.into_iter().fold(0.0, f32::max)
 }
 
-// The AVX2 pass reads and writes a `Vector` as three `f32` in a row.
-const _: () = assert!(std::mem::size_of::<Vector>() == 3 * std::mem::size_of::<f32>());
-
 /// A band's particles with their lanes and velocity lanes, as
 /// [`predict_into_lanes`] takes them.
 type Prediction<'a, 'b> = (
@@ -260,12 +257,12 @@ unsafe fn predict_avx2(
         let k = step * W;
         // SAFETY (for the loads and stores): particles k..k + 8 are in
         // every array, three `f32` each (`Vector` is `repr(C)`).
-        let x0 = load_three(x.add(3 * k));
-        let v0 = load_three(v.add(3 * k));
+        let x0 = load_three(x.add(VECTOR_F32S * k));
+        let v0 = load_three(v.add(VECTOR_F32S * k));
         let w = _mm256_loadu_ps(p.w.as_ptr().add(k));
         // `w != 0.0`, true for NaN as the scalar test is.
         let free = _mm256_cmp_ps::<_CMP_NEQ_UQ>(w, zero);
-        let f = wind.map(|f| load_three(f.add(3 * k)));
+        let f = wind.map(|f| load_three(f.add(VECTOR_F32S * k)));
         let mut vn = [zero; 3];
         let mut xn = [zero; 3];
         for a in 0..3 {
@@ -283,8 +280,8 @@ unsafe fn predict_avx2(
         );
         // The old maximum where the speed is NaN, as `f32::max` keeps it.
         fast = _mm256_max_ps(speed2, fast);
-        store_three(x.add(3 * k), xn);
-        store_three(v.add(3 * k), vn);
+        store_three(x.add(VECTOR_F32S * k), xn);
+        store_three(v.add(VECTOR_F32S * k), vn);
         // Into the lanes, one by one: lanes only reorder a row, so that a
         // lane outside the band is a broken plan, which the check stops.
         let mut out = [[0.0f32; W]; 10];
@@ -478,8 +475,8 @@ unsafe fn swept_avx2(p: &mut BandEnd, swept: [&[f32]; 3], h: f32) -> usize {
         // SAFETY (for the gathers, loads and stores): the lanes are in
         // the band, and particles k..k + 8 in every array.
         let to = swept.map(|c| _mm256_i32gather_ps::<4>(c.as_ptr(), at));
-        let x0 = load_three(x.add(3 * k));
-        let v0 = load_three(v.add(3 * k));
+        let x0 = load_three(x.add(VECTOR_F32S * k));
+        let v0 = load_three(v.add(VECTOR_F32S * k));
         let w = _mm256_loadu_ps(p.w.as_ptr().add(k));
         let free = _mm256_cmp_ps::<_CMP_NEQ_UQ>(w, zero);
         let mut vn = [zero; 3];
@@ -487,8 +484,8 @@ unsafe fn swept_avx2(p: &mut BandEnd, swept: [&[f32]; 3], h: f32) -> usize {
             let corrected = _mm256_add_ps(v0[a], _mm256_div_ps(_mm256_sub_ps(to[a], x0[a]), h));
             vn[a] = _mm256_blendv_ps(v0[a], corrected, free);
         }
-        store_three(v.add(3 * k), vn);
-        store_three(x.add(3 * k), to);
+        store_three(v.add(VECTOR_F32S * k), vn);
+        store_three(x.add(VECTOR_F32S * k), to);
     }
     steps * W
 }
