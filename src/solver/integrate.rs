@@ -22,6 +22,11 @@ pub(crate) struct SubstepOutcome {
     /// limit: how much (m) any of them may still lengthen before it
     /// reaches it (`None`: not known).
     pub stretch_room: Option<f32>,
+    /// The integrator left every stretch spring within the material's
+    /// limit by the limit's own test (`strain_limit::limit_stretch`'s):
+    /// after a stage that moves some particles, only the springs at those
+    /// can be over it.
+    pub stretch_settled: bool,
     /// The integrator held every obstacle's contacts inside the substep
     /// (xpbd's lanes, `lane_contacts.rs`): the collision stage may wait
     /// for the step's last substep.
@@ -53,6 +58,7 @@ pub(crate) fn integrate(
         iterations,
         friction: FrictionPolicy::Apply,
         stretch_room: None,
+        stretch_settled: false,
         contacts_held: false,
         still_held: false,
         touching: 0,
@@ -61,6 +67,7 @@ pub(crate) fn integrate(
         iterations,
         friction: FrictionPolicy::AlreadySolved,
         stretch_room: None,
+        stretch_settled: false,
         contacts_held: false,
         still_held: false,
         touching: 0,
@@ -101,6 +108,7 @@ pub(crate) fn integrate(
             };
             SubstepOutcome {
                 stretch_room: outcome.stretch_room,
+                stretch_settled: outcome.stretch_settled,
                 contacts_held: outcome.contacts_held,
                 still_held: outcome.still_held,
                 touching: outcome.touching,

@@ -92,6 +92,51 @@ pub(crate) fn limit_stretch(
     )
 }
 
+/// [`limit_stretch`] after a stage that moved some particles of a cloth
+/// whose every stretch spring was within the limit before it (by the
+/// limit's own test, as the grid's limit leaves it when it settles):
+/// the first pass looks only at the springs at a particle whose position
+/// differs from `before`, every other spring being still within. The same
+/// bits as [`limit_stretch`] then: that pass would find those within too.
+pub(crate) fn limit_stretch_after_moves(
+    scratch: &mut LimitScratch,
+    (springs, inv_mass): (&Springs, &[f32]),
+    (x, v): (&mut [Vector], Option<&mut [Vector]>),
+    factor: f32,
+    before: &[Vector],
+) -> u32 {
+    let dirty = &mut scratch.dirty;
+    if before.len() != x.len() {
+        // Not the positions before: every spring.
+        dirty.begin(springs, x.len(), false);
+        return limit_passes(
+            springs,
+            inv_mass,
+            (x, v),
+            factor,
+            (PASSES, 1.0),
+            Some(dirty),
+        );
+    }
+    dirty.begin_none(springs, x.len());
+    for (i, (now, was)) in x.iter().zip(before).enumerate() {
+        let same = now.x.to_bits() == was.x.to_bits()
+            && now.y.to_bits() == was.y.to_bits()
+            && now.z.to_bits() == was.z.to_bits();
+        if !same {
+            dirty.moved(i);
+        }
+    }
+    limit_passes(
+        springs,
+        inv_mass,
+        (x, v),
+        factor,
+        (PASSES, 1.0),
+        Some(dirty),
+    )
+}
+
 /// Scratch of the limit's passes ([`limit_stretch`],
 /// [`limit_stretch_supported`]): the pins' weights, and the springs the
 /// next pass looks at ([`DirtySprings`]).
@@ -154,6 +199,22 @@ impl DirtySprings {
         if !count.is_multiple_of(64) {
             self.now[words - 1] = (1 << (count % 64)) - 1;
         }
+        self.next.clear();
+        self.next.resize(words, 0);
+    }
+
+    /// Before a call's passes over the stretch `springs` of `particles`
+    /// that looks at none but those at the particles noted afterwards
+    /// ([`Self::moved`]).
+    fn begin_none(&mut self, springs: &Springs, particles: usize) {
+        let count = springs.count(SpringKind::Stretch);
+        if self.of != (count, particles) {
+            self.at.build(springs, particles);
+            self.of = (count, particles);
+        }
+        let words = count.div_ceil(64);
+        self.now.clear();
+        self.now.resize(words, 0);
         self.next.clear();
         self.next.resize(words, 0);
     }
@@ -302,6 +363,71 @@ fn limit_passes(
 mod tests {
     use super::*;
     use crate::cloth::ClothBuilder;
+
+    /// After some particles of a cloth within its limit moved, the limit
+    /// that looks at their springs alone gives the bits of the limit over
+    /// every spring; given positions that are not the cloth's, it looks at
+    /// every spring.
+    #[test]
+    fn the_limit_at_moved_particles_gives_the_bits_of_the_whole_limit() {
+        let cloth = ClothBuilder::new(9, 7).build().unwrap();
+        let springs = cloth.springs().clone();
+        let inv_mass = cloth.inverse_masses().to_vec();
+        // Within the limit: each particle a little off its rest place.
+        let before: Vec<Vector> = cloth
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| *p + Vector::new(0.0, 0.004 * ((i * 7 % 5) as f32 - 2.0), 0.0))
+            .collect();
+        let mut scratch = LimitScratch::default();
+        let mut within = before.clone();
+        assert_eq!(
+            limit_stretch(
+                &mut scratch,
+                (&springs, &inv_mass),
+                (&mut within, None),
+                1.05
+            ),
+            0,
+            "the cloth starts within its limit"
+        );
+        // Three particles pushed out of the sheet, two of them neighbours.
+        let mut moved = before.clone();
+        for (i, dy) in [(10, 0.06), (11, -0.05), (40, 0.07)] {
+            moved[i].y += dy;
+        }
+        let v0: Vec<Vector> = (0..moved.len())
+            .map(|i| Vector::new(0.0, 0.1 * i as f32, 0.0))
+            .collect();
+        let (mut x_all, mut v_all) = (moved.clone(), v0.clone());
+        let all = limit_stretch(
+            &mut scratch,
+            (&springs, &inv_mass),
+            (&mut x_all, Some(&mut v_all)),
+            1.05,
+        );
+        assert!(all > 0, "the pushes stretched springs past the limit");
+        for wrong in [false, true] {
+            let (mut x, mut v) = (moved.clone(), v0.clone());
+            let from = if wrong { &before[1..] } else { &before[..] };
+            let n = limit_stretch_after_moves(
+                &mut LimitScratch::default(),
+                (&springs, &inv_mass),
+                (&mut x, Some(&mut v)),
+                1.05,
+                from,
+            );
+            assert_eq!(n, all);
+            let bits = |v: &[Vector]| -> Vec<[u32; 3]> {
+                v.iter()
+                    .map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
+                    .collect()
+            };
+            assert_eq!(bits(&x), bits(&x_all));
+            assert_eq!(bits(&v), bits(&v_all));
+        }
+    }
 
     #[test]
     fn a_pulled_particle_is_brought_back_within_the_limit() {

@@ -31,6 +31,9 @@ pub(crate) struct Workspace {
     pub backup_x: Vec<Vector>,
     pub backup_v: Vec<Vector>,
     pub backup_prev: Vec<Vector>,
+    /// Positions before self-collision's pass, to tell which particles it
+    /// moved (`strain_limit::limit_stretch_after_moves`).
+    pub before_self: Vec<Vector>,
     pub explicit: ExplicitScratch,
     pub implicit: ImplicitState,
     pub fms: FastMassSpringState,
@@ -71,6 +74,7 @@ impl Workspace {
             &mut self.backup_x,
             &mut self.backup_v,
             &mut self.backup_prev,
+            &mut self.before_self,
         ] {
             buf.resize(n, Vector::ZERO);
         }

@@ -114,6 +114,12 @@ pub(crate) struct XpbdOutcome {
     /// the room (m) the one with least had left (see
     /// [`super::grid_sweep::limit_stretch`]).
     pub stretch_room: Option<f32>,
+    /// Every stretch spring was within the limit by the limit's own test
+    /// (`grid_sweep::limit_stretch`) when the substep handed the positions
+    /// back: the grid's limit settled and nothing moved a lane after it.
+    /// A stage after the substep that moves some particles then needs to
+    /// look only at the springs at those ([`crate::solver::strain_limit`]).
+    pub stretch_settled: bool,
     /// The substep held the contacts of every obstacle itself
     /// ([`LaneContacts::holds`]): the collision stage may wait for the
     /// step's last substep.
@@ -352,7 +358,8 @@ pub(crate) fn step(
                 plan.forget_unsettled();
             }
             let room = hold_limit(plan, l, (model.stretch_limit, cuboids), team);
-            let room = hold_planes((planes, lane), plan, l, (model.stretch_limit, room), team);
+            let (room, settled) =
+                hold_planes((planes, lane), plan, l, (model.stretch_limit, room), team);
             // At the step's last substep the lanes' contacts win over the
             // limit, as the collision stage's do; a spring lengthens by at
             // most twice the farthest a particle moves. Before it the next
@@ -361,6 +368,9 @@ pub(crate) fn step(
             // 4.76% without; N = 64 4.53% either way).
             let last = sub.ctx.substep + 1 == sub.ctx.substeps;
             let pushed = if last { contacts.project(l, team) } else { 0.0 };
+            // A torn grid leaves springs at its tears to the leftovers,
+            // which the grid's limit does not hold.
+            let settled = settled && pushed == 0.0 && !plan.is_torn();
             let room = room
                 .map(|room| room - 2.0 * pushed)
                 .filter(|&room| room > 0.0);
@@ -415,6 +425,7 @@ pub(crate) fn step(
             }
             XpbdOutcome {
                 stretch_room: room,
+                stretch_settled: settled,
                 contacts_held: holding == Holding::All,
                 still_held: holding == Holding::Still,
                 touching: if holding == Holding::All && last {
@@ -455,6 +466,7 @@ pub(crate) fn step(
             }
             XpbdOutcome {
                 stretch_room: None,
+                stretch_settled: false,
                 contacts_held: false,
                 still_held: false,
                 touching: 0,
@@ -727,18 +739,21 @@ const PLANE_ROUNDS: u32 = 3;
 /// rest length) in [`PLANE_ROUNDS`] rounds, then Coulomb friction on every
 /// particle the planes pushed: its slide over the substep (the obstacles
 /// are still) is undone up to the coefficient times how far the planes
-/// pushed it. Takes the room (m) the limit left every stretch spring and
-/// returns what is left of it: a spring lengthens by at most twice the
-/// farthest a particle moves (`None`: not known, or none left).
+/// pushed it. Takes the room (m) the limit left every stretch spring
+/// (`Some` when it settled) and returns what is left of it: a spring
+/// lengthens by at most twice the farthest a particle moves (`None`: not
+/// known, or none left); and whether the lanes are as a limit call that
+/// settled left them.
 fn hold_planes(
     (planes, lane): (&mut ContactPlanes, &[u32]),
     plan: &mut GridPlan,
     lanes: &mut Lanes,
     (factor, room): (f32, Option<f32>),
     team: Team,
-) -> Option<f32> {
+) -> (Option<f32>, bool) {
+    let mut settled = room.is_some();
     if planes.is_empty() {
-        return room;
+        return (room, settled);
     }
     let mut room = room;
     for r in 0..PLANE_ROUNDS {
@@ -747,8 +762,10 @@ fn hold_planes(
             break;
         }
         room = room.map(|room| room - 2.0 * pushed);
+        settled = false;
         if r + 1 < PLANE_ROUNDS {
             room = hold_limit(plan, lanes, (factor, None), team);
+            settled = room.is_some();
         }
     }
     let ContactPlanes {
@@ -802,8 +819,10 @@ fn hold_planes(
         }
         farthest
     });
-    room.map(|room| room - 2.0 * farthest)
-        .filter(|&room| room > 0.0)
+    let room = room
+        .map(|room| room - 2.0 * farthest)
+        .filter(|&room| room > 0.0);
+    (room, settled && farthest == 0.0)
 }
 
 /// A kind of spring at most this fraction as stiff as the stretch springs
