@@ -37,9 +37,7 @@ use super::stability::{
     chains_lengthen, edge_substeps, stable_substep, stable_substeps, unpinned_substeps,
 };
 use super::stage_times::Lap;
-use super::strain_limit::{
-    limit_stretch, limit_stretch_after_moves, limit_stretch_supported, relaxed_passes,
-};
+use super::strain_limit::{limit_stretch_after_moves, limit_stretch_supported, relaxed_passes};
 use super::substep::Substep;
 use super::substeps::Substeps;
 use super::substeps::{self_collision_substeps, MAX_SELF_SUBSTEP};
@@ -441,29 +439,24 @@ impl ClothSolver {
                     factor,
                     (relaxed_passes(h), false),
                 );
-            } else if self_touching > 0
-                && outcome.stretch_settled
-                && !cloth.params.tethers
-                && limit_after_moves_allowed()
-            {
-                // Only the springs at a particle self-collision moved can be
-                // over the limit (the `fold`'s limit after the pass took 5.5%
-                // of its instructions over every spring; the same bits).
+            } else if !limits_itself || self_touching > 0 || tethered {
+                // After self-collision alone, where the integrator left
+                // every stretch spring within the limit, only the springs
+                // at a particle it moved can be over it (the `fold`'s limit
+                // after the pass took 5.5% of its instructions over every
+                // spring; the same bits). No positions before: all.
+                let only_moved = self_touching > 0
+                    && outcome.stretch_settled
+                    && !cloth.params.tethers
+                    && limit_after_moves_allowed();
+                let before = if only_moved { &ws.before_self[..] } else { &[] };
                 let (x, v) = (&mut p.x[..], Some(&mut p.v[..]));
                 limit_stretch_after_moves(
                     &mut ws.limit_scratch,
                     (springs, &p.inv_mass),
                     (x, v),
                     factor,
-                    &ws.before_self,
-                );
-            } else if !limits_itself || self_touching > 0 || tethered {
-                let (x, v) = (&mut p.x[..], Some(&mut p.v[..]));
-                limit_stretch(
-                    &mut ws.limit_scratch,
-                    (springs, &p.inv_mass),
-                    (x, v),
-                    factor,
+                    before,
                 );
             }
             // Self-collision moved particles the lanes had put out of the

@@ -80,16 +80,8 @@ pub(crate) fn limit_stretch(
     (x, v): (&mut [Vector], Option<&mut [Vector]>),
     factor: f32,
 ) -> u32 {
-    let dirty = &mut scratch.dirty;
-    dirty.begin(springs, x.len(), false);
-    limit_passes(
-        springs,
-        inv_mass,
-        (x, v),
-        factor,
-        (PASSES, 1.0),
-        Some(dirty),
-    )
+    scratch.dirty.begin(springs, x.len(), false);
+    plain_passes(scratch, (springs, inv_mass), (x, v), factor)
 }
 
 /// [`limit_stretch`] after a stage that moved some particles of a cloth
@@ -98,6 +90,7 @@ pub(crate) fn limit_stretch(
 /// the first pass looks only at the springs at a particle whose position
 /// differs from `before`, every other spring being still within. The same
 /// bits as [`limit_stretch`] then: that pass would find those within too.
+/// Positions `before` of another length: every spring.
 pub(crate) fn limit_stretch_after_moves(
     scratch: &mut LimitScratch,
     (springs, inv_mass): (&Springs, &[f32]),
@@ -105,19 +98,10 @@ pub(crate) fn limit_stretch_after_moves(
     factor: f32,
     before: &[Vector],
 ) -> u32 {
-    let dirty = &mut scratch.dirty;
     if before.len() != x.len() {
-        // Not the positions before: every spring.
-        dirty.begin(springs, x.len(), false);
-        return limit_passes(
-            springs,
-            inv_mass,
-            (x, v),
-            factor,
-            (PASSES, 1.0),
-            Some(dirty),
-        );
+        return limit_stretch(scratch, (springs, inv_mass), (x, v), factor);
     }
+    let dirty = &mut scratch.dirty;
     dirty.begin_none(springs, x.len());
     for (i, (now, was)) in x.iter().zip(before).enumerate() {
         let same = now.x.to_bits() == was.x.to_bits()
@@ -127,14 +111,19 @@ pub(crate) fn limit_stretch_after_moves(
             dirty.moved(i);
         }
     }
-    limit_passes(
-        springs,
-        inv_mass,
-        (x, v),
-        factor,
-        (PASSES, 1.0),
-        Some(dirty),
-    )
+    plain_passes(scratch, (springs, inv_mass), (x, v), factor)
+}
+
+/// Up to [`PASSES`] plain passes over the springs the scratch's dirty bits
+/// (begun for this call) give.
+fn plain_passes(
+    scratch: &mut LimitScratch,
+    (springs, inv_mass): (&Springs, &[f32]),
+    (x, v): (&mut [Vector], Option<&mut [Vector]>),
+    factor: f32,
+) -> u32 {
+    let dirty = Some(&mut scratch.dirty);
+    limit_passes(springs, inv_mass, (x, v), factor, (PASSES, 1.0), dirty)
 }
 
 /// Scratch of the limit's passes ([`limit_stretch`],
