@@ -368,6 +368,12 @@ impl ClothSolver {
             };
             watch.lap(&mut times.integrate);
             report.iterations += outcome.iterations;
+            // Where the integrator left every stretch spring within the
+            // limit and no tether moves a particle after self-collision,
+            // the limit after its pass looks only at the springs at the
+            // particles it moved (the `fold`'s limit after the pass took
+            // 5.5% of its instructions over every spring; the same bits).
+            let watch_moves = outcome.stretch_settled && !cloth.params.tethers;
             // Self-collision: before the stretch limit (a layer pushed off
             // another must not stretch the cloth past it) and the obstacles
             // (they win where the two disagree: a layer pressed onto a ball
@@ -382,10 +388,8 @@ impl ClothSolver {
                     selfc.find(look, &cloth.particles.x, &basis, team);
                     report.self_looks += 1;
                 }
-                // Where the integrator left every stretch spring within the
-                // limit, the limit after this pass looks only at the springs
-                // at the particles it moves: a copy to tell which.
-                if outcome.stretch_settled && !cloth.params.tethers {
+                // The positions before the pass, to tell which it moves.
+                if watch_moves {
                     ws.before_self.clear();
                     ws.before_self.extend_from_slice(&cloth.particles.x);
                 }
@@ -440,15 +444,9 @@ impl ClothSolver {
                     (relaxed_passes(h), false),
                 );
             } else if !limits_itself || self_touching > 0 || tethered {
-                // After self-collision alone, where the integrator left
-                // every stretch spring within the limit, only the springs
-                // at a particle it moved can be over it (the `fold`'s limit
-                // after the pass took 5.5% of its instructions over every
-                // spring; the same bits). No positions before: all.
-                let only_moved = self_touching > 0
-                    && outcome.stretch_settled
-                    && !cloth.params.tethers
-                    && limit_after_moves_allowed();
+                // Only the springs at a particle self-collision moved can be
+                // over the limit (`watch_moves`); no positions before: all.
+                let only_moved = self_touching > 0 && watch_moves && limit_after_moves_allowed();
                 let before = if only_moved { &ws.before_self[..] } else { &[] };
                 let (x, v) = (&mut p.x[..], Some(&mut p.v[..]));
                 limit_stretch_after_moves(
@@ -836,10 +834,8 @@ mod tests {
                 touching += scene.step_frame().unwrap().self_contacts;
             }
             let p = &scene.cloth.particles;
-            let bits = |v: &[Vector]| -> Vec<[u32; 3]> {
-                v.iter()
-                    .map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
-                    .collect()
+            let bits = |p: &[Vector]| -> Vec<[u32; 3]> {
+                p.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
             };
             (bits(&p.x), bits(&p.v), touching, AFTER_MOVES.get().1)
         };

@@ -104,10 +104,7 @@ pub(crate) fn limit_stretch_after_moves(
     let dirty = &mut scratch.dirty;
     dirty.begin_none(springs, x.len());
     for (i, (now, was)) in x.iter().zip(before).enumerate() {
-        let same = now.x.to_bits() == was.x.to_bits()
-            && now.y.to_bits() == was.y.to_bits()
-            && now.z.to_bits() == was.z.to_bits();
-        if !same {
+        if now.to_array().map(f32::to_bits) != was.to_array().map(f32::to_bits) {
             dirty.moved(i);
         }
     }
@@ -194,18 +191,12 @@ impl DirtySprings {
 
     /// Before a call's passes over the stretch `springs` of `particles`
     /// that looks at none but those at the particles noted afterwards
-    /// ([`Self::moved`]).
+    /// ([`Self::moved`]): [`Self::begin`], whose lists of the springs at
+    /// each particle are made again whenever the springs change (another
+    /// cloth of as many springs and particles too), with no spring marked.
     fn begin_none(&mut self, springs: &Springs, particles: usize) {
-        let count = springs.count(SpringKind::Stretch);
-        if self.of != (count, particles) {
-            self.at.build(springs, particles);
-            self.of = (count, particles);
-        }
-        let words = count.div_ceil(64);
-        self.now.clear();
-        self.now.resize(words, 0);
-        self.next.clear();
-        self.next.resize(words, 0);
+        self.begin(springs, particles, false);
+        self.now.fill(0);
     }
 
     /// Notes that particle `i` moved after every look so far.
@@ -408,10 +399,8 @@ mod tests {
                 from,
             );
             assert_eq!(n, all);
-            let bits = |v: &[Vector]| -> Vec<[u32; 3]> {
-                v.iter()
-                    .map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
-                    .collect()
+            let bits = |p: &[Vector]| -> Vec<[u32; 3]> {
+                p.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
             };
             assert_eq!(bits(&x), bits(&x_all));
             assert_eq!(bits(&v), bits(&v_all));
