@@ -161,8 +161,8 @@ impl PairLanes {
             return;
         }
         let particles = self.particles;
-        // Within the particles, and a gather's offset (4 floats a
-        // particle at most) within an `i32`.
+        // Within the particles, and an index the lanes hold as an `i32`
+        // (a quarter of its range, as when they were gathers' offsets).
         let fits = |i: u32| (i as usize) < particles && i <= i32::MAX as u32 / 4;
         match corners {
             Some(tri) if fits(pair.particle) && tri.into_iter().all(fits) => {
@@ -225,28 +225,35 @@ impl PairLanes {
         assert!(k + LANES <= self.p.len() && self.p.len() == self.side.len());
         assert!(self.corners.iter().all(|c| c.len() == self.p.len()));
         let base = x.ptr as *const f32;
-        let stride = _mm256_set1_epi32(VECTOR_F32S as i32);
         // SAFETY: `k + LANES` within the lanes (asserted); each index below
-        // `x.len()` (the caller's promise), so each gather reads a
-        // coordinate of a particle.
+        // `x.len()` (the caller's promise) and not negative (`push`), so
+        // each masked load reads the three floats of a particle.
         unsafe {
-            let load = |v: &Vec<i32>| {
-                _mm256_mullo_epi32(
-                    _mm256_loadu_si256(v.as_ptr().add(k) as *const __m256i),
-                    stride,
-                )
-            };
-            let point = |at: __m256i| {
+            // Each lane's point by one load of its three floats (masked:
+            // the fourth may lie past the last particle), the eight then
+            // turned into coordinates: three gathers a point took longer
+            // (the `stack` at rest 12.5 -> 10.8 ms a frame on one thread,
+            // medians of alternated runs).
+            let xyz = _mm_setr_epi32(-1, -1, -1, 0);
+            let point = |v: &Vec<i32>| {
+                let i = v.as_ptr().add(k);
+                let at =
+                    |l: usize| _mm_maskload_ps(base.add(VECTOR_F32S * *i.add(l) as usize), xyz);
+                let pair =
+                    |l: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(at(l)), at(l + 4));
+                let (t0, t1, t2, t3) = (pair(0), pair(1), pair(2), pair(3));
+                let (u0, u1) = (_mm256_unpacklo_ps(t0, t1), _mm256_unpackhi_ps(t0, t1));
+                let (u2, u3) = (_mm256_unpacklo_ps(t2, t3), _mm256_unpackhi_ps(t2, t3));
                 [
-                    _mm256_i32gather_ps::<4>(base, at),
-                    _mm256_i32gather_ps::<4>(base.add(1), at),
-                    _mm256_i32gather_ps::<4>(base.add(2), at),
+                    _mm256_shuffle_ps::<0x44>(u0, u2),
+                    _mm256_shuffle_ps::<0xEE>(u0, u2),
+                    _mm256_shuffle_ps::<0x44>(u1, u3),
                 ]
             };
-            let p = point(load(&self.p));
-            let a = point(load(&self.corners[0]));
-            let b = point(load(&self.corners[1]));
-            let c = point(load(&self.corners[2]));
+            let p = point(&self.p);
+            let a = point(&self.corners[0]);
+            let b = point(&self.corners[1]);
+            let c = point(&self.corners[2]);
             let sub = |u: [__m256; 3], v: [__m256; 3]| [0, 1, 2].map(|i| _mm256_sub_ps(u[i], v[i]));
             let (e1, e2, d) = (sub(b, a), sub(c, a), sub(p, a));
             // e1 × e2, as `Vector::cross`.
