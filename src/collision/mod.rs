@@ -16,6 +16,7 @@ pub(crate) mod contact;
 mod contact_planes;
 mod contact_set;
 mod edges;
+mod motion_tiles;
 mod neighbours;
 mod obstacle;
 mod one_obstacle;

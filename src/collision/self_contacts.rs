@@ -9,9 +9,10 @@
 //! over the triangles, so it is taken again only when it may have missed
 //! a pair: whenever two particles may have closed in by more than the
 //! margin since the last look (a neighbour list with a skin, as in
-//! molecular dynamics), by the smaller of two bounds: the diagonal of the
-//! box around the particles' motions, and twice the farthest motion from
-//! their mean; and when the
+//! molecular dynamics), by the smallest of three bounds: the diagonal of
+//! the box around the particles' motions, twice the farthest motion from
+//! their mean, and the same diagonal for the particles near each other
+//! alone, tile by tile ([`MotionTiles`]); and when the
 //! cloth, its thickness or the margin changed. Every substep for a cloth
 //! in violent motion, seldom for one at rest or in free fall: a look
 //! carries over from step to step (the `stack` at rest looked once a step
@@ -50,6 +51,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::motion_tiles::MotionTiles;
 use super::neighbours::{MeshNeighbours, Sheet};
 use super::patches::Patches;
 use super::spatial_hash::SpatialHash;
@@ -106,6 +108,9 @@ pub struct SelfContacts {
     /// Per block of border edges: the edge pairs it found at the last look.
     border_blocks: Vec<EdgeList>,
     neighbours: MeshNeighbours,
+    /// The particles in tiles, for the test of the motions of those near
+    /// each other.
+    tiles: MotionTiles,
     /// The blocks of triangles the last look used, and the pairs they found.
     used_blocks: usize,
     pairs: usize,
@@ -984,6 +989,7 @@ impl SelfContacts {
         team: Team,
     ) {
         self.neighbours.update(basis.topology, basis.particles);
+        self.tiles.update(basis.topology, basis.particles);
         self.margin = basis.margin.max(1.0e-4);
         let Some(last) = look.as_ref() else {
             return;
@@ -1001,8 +1007,8 @@ impl SelfContacts {
 
     /// True when particles at `x` may have closed in on each other by more
     /// than the margin since the `look` (or there is none), by the module's
-    /// two bounds.
-    pub(crate) fn due(&self, look: &Option<SelfLook>, x: &[Vector]) -> bool {
+    /// three bounds.
+    pub(crate) fn due(&mut self, look: &Option<SelfLook>, x: &[Vector]) -> bool {
         let Some(look) = look else {
             return true;
         };
@@ -1025,9 +1031,18 @@ impl SelfContacts {
         let sum = moved.clone().fold(Vector::ZERO, |sum, d| sum + d);
         let mean = sum / x.len().max(1) as f32;
         let half = 0.5 * self.margin;
-        moved
+        if !moved
             .into_iter()
             .any(|d| (d - mean).length_squared() > half * half)
+        {
+            return false;
+        }
+        // And by the motions of the particles near each other alone, tile
+        // by tile ([`MotionTiles`]): near, as far as the pass reaches
+        // from a triangle (on a pair's far side, the thickness and the
+        // margin; over the rim, at most the thickness).
+        let near = 2.0 * look.thickness + self.margin;
+        self.tiles.closed_in(x, &look.at, near, self.margin)
     }
 
     /// Looks for pairs at positions `x` (the `basis`'s thickness and
