@@ -24,7 +24,9 @@
 //! skirts swing, whose layers fall towards each other from afar).
 
 use crate::cloth::Topology;
-use crate::math::{simd_available, Vector, VECTOR_F32S};
+#[cfg(target_arch = "x86_64")]
+use crate::math::load_vectors;
+use crate::math::{simd_available, Vector};
 
 /// Particles along a side of a grid piece's tile. Measured on the `stack`
 /// (looks a frame, 120 frames; 4.83 with the whole cloth's test alone):
@@ -223,25 +225,10 @@ impl MotionTiles {
     unsafe fn measure_avx2(&mut self, x: &[Vector], at: &[Vector], tiles: usize) -> bool {
         use std::arch::x86_64::*;
         let (xs, ats) = (x.as_ptr() as *const f32, at.as_ptr() as *const f32);
-        // A particle's three floats (masked: the fourth may lie past the
-        // last particle), eight particles turned into coordinates.
-        let xyz = _mm_setr_epi32(-1, -1, -1, 0);
-        let points = |base: *const f32, i: &[u32]| {
-            // SAFETY: every index below the array's length (the caller's
-            // promise).
-            let at = |l: usize| unsafe {
-                _mm_maskload_ps(base.add(VECTOR_F32S * *i.get_unchecked(l) as usize), xyz)
-            };
-            let pair =
-                |l: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(at(l)), at(l + 4));
-            let (t0, t1, t2, t3) = (pair(0), pair(1), pair(2), pair(3));
-            let (u0, u1) = (_mm256_unpacklo_ps(t0, t1), _mm256_unpackhi_ps(t0, t1));
-            let (u2, u3) = (_mm256_unpacklo_ps(t2, t3), _mm256_unpackhi_ps(t2, t3));
-            [
-                _mm256_shuffle_ps::<0x44>(u0, u2),
-                _mm256_shuffle_ps::<0xEE>(u0, u2),
-                _mm256_shuffle_ps::<0x44>(u1, u3),
-            ]
+        // SAFETY: every index below the arrays' length (the caller's
+        // promise).
+        let points = |base: *const f32, i: &[u32]| unsafe {
+            load_vectors(base, std::array::from_fn(|l| *i.get_unchecked(l) as usize))
         };
         let mut lost = _mm256_setzero_ps();
         for t in 0..tiles {
@@ -481,6 +468,7 @@ fn tiles_of(topology: &Topology, n: usize) -> (Vec<u32>, usize) {
 mod tests {
     use super::*;
     use crate::cloth::{Cloth, ClothBuilder};
+    use crate::collision::contact::nearest_on_triangle;
 
     /// Two 10 × 10 sheets of 0.3 m joined into one cloth, the second
     /// `apart` metres above the first.
@@ -500,40 +488,6 @@ mod tests {
         let mut tiles = MotionTiles::default();
         tiles.update(&cloth.topology, cloth.particle_count());
         tiles
-    }
-
-    /// The point of triangle `[a, b, c]` closest to `p` (Ericson,
-    /// "Real-Time Collision Detection", 5.1.5).
-    fn closest_on_triangle(p: Vector, [a, b, c]: [Vector; 3]) -> Vector {
-        let (ab, ac, ap) = (b - a, c - a, p - a);
-        let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-        if d1 <= 0.0 && d2 <= 0.0 {
-            return a;
-        }
-        let bp = p - b;
-        let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-        if d3 >= 0.0 && d4 <= d3 {
-            return b;
-        }
-        let vc = d1 * d4 - d3 * d2;
-        if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-            return a + ab * (d1 / (d1 - d3));
-        }
-        let cp = p - c;
-        let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-        if d6 >= 0.0 && d5 <= d6 {
-            return c;
-        }
-        let vb = d5 * d2 - d1 * d6;
-        if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-            return a + ac * (d2 / (d2 - d6));
-        }
-        let va = d3 * d6 - d5 * d4;
-        if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-            return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-        }
-        let denom = 1.0 / (va + vb + vc);
-        a + ab * (vb * denom) + ac * (vc * denom)
     }
 
     /// Every particle is in one tile, each triangle in the reach of the
@@ -627,8 +581,8 @@ mod tests {
             quiet[beside] += 1;
             for (p, &xp) in x.iter().enumerate() {
                 for tri in &cloth.topology.triangles {
-                    let corners = tri.map(|c| x[c as usize]);
-                    if (closest_on_triangle(xp, corners) - xp).length() > near {
+                    let [a, b, c] = tri.map(|c| x[c as usize]);
+                    if (nearest_on_triangle(xp, (a, b, c)) - xp).length() > near {
                         continue;
                     }
                     let moved = xp - at[p];

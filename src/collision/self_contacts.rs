@@ -56,6 +56,8 @@ use super::neighbours::{MeshNeighbours, Sheet};
 use super::patches::Patches;
 use super::spatial_hash::SpatialHash;
 use crate::cloth::{Particles, Topology};
+#[cfg(target_arch = "x86_64")]
+use crate::math::load_vectors;
 use crate::math::{simd_available, Vector, VECTOR_F32S};
 use crate::parallel::{Disjoint, Team};
 
@@ -234,26 +236,10 @@ impl PairLanes {
         // `x.len()` (the caller's promise) and not negative (`push`), so
         // each masked load reads the three floats of a particle.
         unsafe {
-            // Each lane's point by one load of its three floats (masked:
-            // the fourth may lie past the last particle), the eight then
-            // turned into coordinates: three gathers a point took longer
-            // (the `stack` at rest 12.5 -> 10.8 ms a frame on one thread,
-            // medians of alternated runs).
-            let xyz = _mm_setr_epi32(-1, -1, -1, 0);
+            // Each lane's point by one masked load (`load_vectors`).
             let point = |v: &Vec<i32>| {
-                let i = v.as_ptr().add(k);
-                let at =
-                    |l: usize| _mm_maskload_ps(base.add(VECTOR_F32S * *i.add(l) as usize), xyz);
-                let pair =
-                    |l: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(at(l)), at(l + 4));
-                let (t0, t1, t2, t3) = (pair(0), pair(1), pair(2), pair(3));
-                let (u0, u1) = (_mm256_unpacklo_ps(t0, t1), _mm256_unpackhi_ps(t0, t1));
-                let (u2, u3) = (_mm256_unpacklo_ps(t2, t3), _mm256_unpackhi_ps(t2, t3));
-                [
-                    _mm256_shuffle_ps::<0x44>(u0, u2),
-                    _mm256_shuffle_ps::<0xEE>(u0, u2),
-                    _mm256_shuffle_ps::<0x44>(u1, u3),
-                ]
+                let index = std::array::from_fn(|l| *v.get_unchecked(k + l) as usize);
+                load_vectors(base, index)
             };
             let p = point(&self.p);
             let a = point(&self.corners[0]);
@@ -993,22 +979,10 @@ impl Look<'_> {
         use std::arch::x86_64::*;
         let x = self.x;
         assert!(ends.len() <= LANES && ends.iter().all(|&f| (f as usize) < x.len()));
-        let base = x.as_ptr() as *const f32;
-        // The ends' points (the lanes past them repeat the first), one
-        // masked load of three floats each, turned into coordinates.
-        let xyz = _mm_setr_epi32(-1, -1, -1, 0);
+        // The ends' points (the lanes past them repeat the first).
         let end = |l: usize| ends.get(l).or(ends.first()).map_or(0, |&f| f as usize);
         // SAFETY: each end below `x.len()` (asserted).
-        let at = |l: usize| unsafe { _mm_maskload_ps(base.add(VECTOR_F32S * end(l)), xyz) };
-        let pair = |l: usize| _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(at(l)), at(l + 4));
-        let (t0, t1, t2, t3) = (pair(0), pair(1), pair(2), pair(3));
-        let (u0, u1) = (_mm256_unpacklo_ps(t0, t1), _mm256_unpackhi_ps(t0, t1));
-        let (u2, u3) = (_mm256_unpacklo_ps(t2, t3), _mm256_unpackhi_ps(t2, t3));
-        let f = [
-            _mm256_shuffle_ps::<0x44>(u0, u2),
-            _mm256_shuffle_ps::<0xEE>(u0, u2),
-            _mm256_shuffle_ps::<0x44>(u1, u3),
-        ];
+        let f = unsafe { load_vectors(x.as_ptr() as *const f32, std::array::from_fn(end)) };
         let (e, lo, hi) = (xe.to_array(), lo.to_array(), hi.to_array());
         let mut meets = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
         for c in 0..3 {
