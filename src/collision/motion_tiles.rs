@@ -467,14 +467,39 @@ fn tiles_of(topology: &Topology, n: usize) -> (Vec<u32>, usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cloth::{Cloth, ClothBuilder};
+    use crate::cloth::{Cloth, ClothBuilder, ClothMesh, MassSpec, Material};
     use crate::collision::contact::nearest_on_triangle;
 
-    /// Two 10 × 10 sheets of 0.3 m joined into one cloth, the second
-    /// `apart` metres above the first.
-    fn two_sheets(apart: f32) -> (Cloth, Vec<Vector>) {
-        let sheet = ClothBuilder::new(10, 10).size(0.3, 0.3).build().unwrap();
-        let cloth = Cloth::join(vec![sheet; 2]).unwrap();
+    /// Two 10 × 10 sheets of 0.3 m in one cloth, the second `apart`
+    /// metres above the first: grids joined, or one mesh of their quads
+    /// (no grid: tiles of runs of indices).
+    fn two_sheets(apart: f32, mesh: bool) -> (Cloth, Vec<Vector>) {
+        let cloth = if mesh {
+            let n = 10u32;
+            let step = 0.3 / (n - 1) as f32;
+            let positions = (0..2 * n * n)
+                .map(|i| {
+                    let k = i % (n * n);
+                    Vector::new((k % n) as f32 * step, 0.0, (k / n) as f32 * step)
+                })
+                .collect();
+            let faces = (0..2 * (n - 1) * (n - 1))
+                .map(|q| {
+                    let (sheet, q) = (q / ((n - 1) * (n - 1)), q % ((n - 1) * (n - 1)));
+                    let i = sheet * n * n + (q / (n - 1)) * n + q % (n - 1);
+                    vec![i, i + n, i + n + 1, i + 1]
+                })
+                .collect();
+            let mesh = ClothMesh {
+                positions,
+                faces,
+                uvs: Vec::new(),
+            };
+            Cloth::from_mesh(&mesh, Material::cotton(), MassSpec::FromDensity).unwrap()
+        } else {
+            let sheet = ClothBuilder::new(10, 10).size(0.3, 0.3).build().unwrap();
+            Cloth::join(vec![sheet; 2]).unwrap()
+        };
         let x = cloth
             .positions()
             .iter()
@@ -494,11 +519,23 @@ mod tests {
     /// tile of each of its corners, and each reach is whole steps.
     #[test]
     fn each_tile_reaches_the_triangles_at_its_particles() {
-        let (cloth, _) = two_sheets(0.1);
+        for mesh in [false, true] {
+            each_tile_reaches_the_triangles_at_its_particles_of(mesh);
+        }
+    }
+
+    fn each_tile_reaches_the_triangles_at_its_particles_of(mesh: bool) {
+        let (cloth, _) = two_sheets(0.1, mesh);
         let tiles = tiles_for(&cloth);
         let count = tiles.start.len() - 1;
-        // 10 × 10 in tiles of 4: 3 × 3 a sheet.
-        assert_eq!(count, 2 * 10usize.div_ceil(TILE_SIDE).pow(2));
+        // 10 × 10 in tiles of 4: 3 × 3 a sheet; a mesh's 200 particles in
+        // runs of 16.
+        let want = if mesh {
+            200usize.div_ceil(TILE_SIDE * TILE_SIDE)
+        } else {
+            2 * 10usize.div_ceil(TILE_SIDE).pow(2)
+        };
+        assert_eq!(count, want);
         let reach = |t: usize| &tiles.reach[tiles.start[t] as usize..tiles.start[t + 1] as usize];
         let mut owners = vec![0; cloth.particle_count()];
         let (tile, _) = tiles_of(&cloth.topology, cloth.particle_count());
@@ -528,7 +565,13 @@ mod tests {
     /// occur, and the plain loops give each.
     #[test]
     fn no_particle_near_a_triangle_closed_in_on_it_unseen() {
-        let (cloth, rest) = two_sheets(0.0);
+        for mesh in [false, true] {
+            no_particle_near_a_triangle_closed_in_on_it_unseen_of(mesh);
+        }
+    }
+
+    fn no_particle_near_a_triangle_closed_in_on_it_unseen_of(mesh: bool) {
+        let (cloth, rest) = two_sheets(0.0, mesh);
         let mut tiles = tiles_for(&cloth);
         let (near, margin) = (0.015, 0.01);
         let mut seed = 7u32;
@@ -590,7 +633,7 @@ mod tests {
                         let against = moved - (x[c as usize] - at[c as usize]);
                         assert!(
                             against.length() <= margin * (1.0 + 1.0e-5),
-                            "trial {trial}: particle {p} moved {} against corner {c}",
+                            "trial {trial} (mesh: {mesh}): particle {p} moved {} against corner {c}",
                             against.length()
                         );
                     }
@@ -599,7 +642,7 @@ mod tests {
         }
         assert!(
             quiet.iter().chain(&due).all(|&n| n >= 10),
-            "{quiet:?} quiet, {due:?} due (over, beside)"
+            "{quiet:?} quiet, {due:?} due (over, beside), mesh: {mesh}"
         );
     }
 
@@ -610,7 +653,7 @@ mod tests {
         use crate::collision::{LookBasis, SelfContacts};
         use crate::parallel::Team;
         for (apart, due) in [(0.5, false), (0.012, true)] {
-            let (cloth, at) = two_sheets(apart);
+            let (cloth, at) = two_sheets(apart, false);
             // The upper sheet slides 3 cm (three margins) over the other.
             let x: Vec<Vector> = at
                 .iter()
@@ -637,7 +680,7 @@ mod tests {
     /// look.
     #[test]
     fn boxes_the_same_either_way_and_lost_positions_look_again() {
-        let (cloth, at) = two_sheets(0.05);
+        let (cloth, at) = two_sheets(0.05, true);
         let mut tiles = tiles_for(&cloth);
         let x: Vec<Vector> = at
             .iter()
