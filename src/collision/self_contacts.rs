@@ -903,10 +903,11 @@ impl Look<'_> {
     }
 
     /// The pair of the border edge `[ia, ib]` (from `a`, along `u`) with
-    /// the edge from particle `e` to `f`, whose box meets the near box, pushed to `out` when it lies within reach: each edge once
-    /// (from its lower end when both ends are `inside` the look's box),
-    /// neither the border edge's neighbour nor of its `sheet`, and two
-    /// border edges once.
+    /// the edge from particle `e` to `f`, whose box meets the near box,
+    /// pushed to `out` when it lies within reach: each edge once (from its
+    /// lower end when both ends are `inside` the look's box), neither the
+    /// border edge's neighbour nor of its `sheet`, and two border edges
+    /// once.
     #[inline(always)]
     fn border_pair(
         &self,
@@ -1869,10 +1870,6 @@ mod tests {
         }
     }
 
-    /// The pass eight pairs at a time (a vector test passing over the
-    /// idle ones) gives the bits of the pass one pair at a time, pass
-    /// after pass, and as many pairs closer than the thickness; its two
-    /// parts on two threads too.
     /// The border edges' look finds the same pairs with the AVX2 test of
     /// a ring's edges as with the plain one.
     #[test]
@@ -1887,6 +1884,10 @@ mod tests {
         assert_eq!(simd.edge_pairs, portable.edge_pairs);
     }
 
+    /// The pass eight pairs at a time (a vector test passing over the
+    /// idle ones) gives the bits of the pass one pair at a time, pass
+    /// after pass, and as many pairs closer than the thickness; its two
+    /// parts on two threads too.
     #[test]
     fn the_pass_by_eights_gives_the_bits_of_one_pair_at_a_time() {
         let (cloth, x) = crumpled_layers();
