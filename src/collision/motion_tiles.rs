@@ -23,6 +23,7 @@
 //! the looks of a cloth whose far parts move apart (the `stack`, whose
 //! skirts swing, whose layers fall towards each other from afar).
 
+use super::neighbours::TopologyKey;
 use crate::cloth::Topology;
 #[cfg(target_arch = "x86_64")]
 use crate::math::load_vectors;
@@ -54,11 +55,8 @@ pub(crate) struct MotionTiles {
     order: Vec<u32>,
     /// The boxes in that order, coordinate by coordinate (scratch).
     sorted: SortedBoxes,
-    /// What the tiles were made from: the topology's address, particle and
-    /// triangle counts, and a checksum of the triangles' corners and the
-    /// grid pieces (another cloth of as many particles and triangles may
-    /// take the same address: a 32 × 48 grid after a 48 × 32).
-    made_for: Option<(usize, usize, usize, u32)>,
+    /// What the tiles were made from.
+    made_for: Option<TopologyKey>,
 }
 
 /// The boxes of a tile at a test: around its reach's positions (m) and
@@ -72,34 +70,15 @@ struct TileBoxes {
 }
 
 impl MotionTiles {
-    /// Makes the tiles for `topology` of `n` particles, unless they were
-    /// made for it already (allocates then, never in a test).
-    pub(crate) fn update(&mut self, topology: &Topology, n: usize) {
-        let corners = topology
-            .triangles
-            .iter()
-            .enumerate()
-            // A sum of mixed terms, not a chain: it runs as vectors.
-            .map(|(k, &[a, b, c])| {
-                (a ^ b.rotate_left(11) ^ c.rotate_left(22) ^ k as u32).wrapping_mul(0x9E37_79B1)
-            })
-            .fold(0u32, u32::wrapping_add);
-        let pieces = topology.grid_pieces().fold(0u32, |sum, piece| {
-            let words = [piece.first_particle, piece.grid.cols, piece.grid.rows];
-            words
-                .into_iter()
-                .fold(sum, |s, w| (s ^ w as u32).wrapping_mul(0x0100_0193))
-        });
-        let key = (
-            topology as *const Topology as usize,
-            n,
-            topology.triangles.len(),
-            corners ^ pieces.rotate_left(7),
-        );
+    /// Makes the tiles for `topology`, whose key is `key`
+    /// ([`TopologyKey::of`]), unless they were made for it already
+    /// (allocates then, never in a test).
+    pub(crate) fn update(&mut self, topology: &Topology, key: TopologyKey) {
         if self.made_for == Some(key) {
             return;
         }
         self.made_for = Some(key);
+        let n = key.particles();
         let (tile, tiles) = tiles_of(topology, n);
         // Each tile's reach: its particles and the corners of every
         // triangle with a corner in it.
@@ -155,7 +134,7 @@ impl MotionTiles {
         (near, margin): (f32, f32),
         simd: bool,
     ) -> bool {
-        if self.made_for.map(|(_, n, _, _)| n) != Some(x.len()) || at.len() != x.len() {
+        if self.made_for.map(TopologyKey::particles) != Some(x.len()) || at.len() != x.len() {
             return true;
         }
         if !self.measure(x, at, simd) {
@@ -511,7 +490,8 @@ mod tests {
 
     fn tiles_for(cloth: &Cloth) -> MotionTiles {
         let mut tiles = MotionTiles::default();
-        tiles.update(&cloth.topology, cloth.particle_count());
+        let key = TopologyKey::of(&cloth.topology, cloth.particle_count());
+        tiles.update(&cloth.topology, key);
         tiles
     }
 

@@ -36,24 +36,72 @@ pub(crate) struct MeshNeighbours {
     /// a row and along a column), from which rest distances follow; empty
     /// off a grid.
     rest: Vec<[f32; 2]>,
-    /// What the lists were made from: the topology's address, particle,
-    /// spring and triangle counts.
-    made_for: Option<(usize, usize, usize, usize)>,
+    /// What the lists were made from.
+    made_for: Option<TopologyKey>,
+}
+
+/// What lists made from a topology of some particles are kept by: the
+/// topology's address, the particle, spring and triangle counts, and a
+/// checksum of the triangles' corners and the grid pieces. The address
+/// and counts alone let another cloth's topology of as many particles,
+/// springs and triangles, made where a dropped one was, reuse its lists
+/// (a 32 × 48 grid after a 48 × 32).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct TopologyKey {
+    address: usize,
+    particles: usize,
+    springs: usize,
+    triangles: usize,
+    checksum: u32,
+}
+
+impl TopologyKey {
+    /// The key of `topology` on `particles` particles: a pass over its
+    /// triangles.
+    pub fn of(topology: &Topology, particles: usize) -> TopologyKey {
+        let corners = topology
+            .triangles
+            .iter()
+            .enumerate()
+            // A sum of mixed terms, not a chain: it runs as vectors.
+            .map(|(k, &[a, b, c])| {
+                (a ^ b.rotate_left(11) ^ c.rotate_left(22) ^ k as u32).wrapping_mul(0x9E37_79B1)
+            })
+            .fold(0u32, u32::wrapping_add);
+        let pieces = topology.grid_pieces().fold(0u32, |sum, piece| {
+            let words = [piece.first_particle, piece.grid.cols, piece.grid.rows];
+            words
+                .into_iter()
+                .fold(sum, |s, w| (s ^ w as u32).wrapping_mul(0x0100_0193))
+        });
+        TopologyKey {
+            address: topology as *const Topology as usize,
+            particles,
+            springs: topology.springs.len(),
+            triangles: topology.triangles.len(),
+            checksum: corners ^ pieces.rotate_left(7),
+        }
+    }
+
+    /// The particles the key is of.
+    pub fn particles(self) -> usize {
+        self.particles
+    }
 }
 
 impl MeshNeighbours {
     /// Makes the lists for `topology` of `n` particles, unless they were
     /// made for it already.
     pub fn update(&mut self, topology: &Topology, n: usize) {
-        let key = (
-            topology as *const Topology as usize,
-            n,
-            topology.springs.len(),
-            topology.triangles.len(),
-        );
+        self.update_for(topology, TopologyKey::of(topology, n));
+    }
+
+    /// [`Self::update`] with the topology's key, `key` (of `topology`).
+    pub fn update_for(&mut self, topology: &Topology, key: TopologyKey) {
         if self.made_for == Some(key) {
             return;
         }
+        let n = key.particles;
         let springs = &topology.springs;
         let pairs = springs
             .a
@@ -197,6 +245,40 @@ fn compressed(n: usize, pairs: impl Iterator<Item = (u32, u32)>) -> (Vec<u32>, V
 mod tests {
     use super::*;
     use crate::cloth::ClothBuilder;
+
+    /// Another cloth of as many particles, springs and triangles whose
+    /// topology lies where the last one's did (a 6 × 8 grid after an 8 ×
+    /// 6) gets lists of its own: the key's checksum tells them apart.
+    #[test]
+    fn a_topology_of_the_same_counts_at_the_same_address_is_listed_again() {
+        let (wide, tall) = (
+            ClothBuilder::new(8, 6).build().unwrap(),
+            ClothBuilder::new(6, 8).build().unwrap(),
+        );
+        let n = wide.particle_count();
+        let first = TopologyKey::of(wide.topology(), n);
+        // The second as if made where the first was.
+        let second = TopologyKey {
+            address: first.address,
+            ..TopologyKey::of(tall.topology(), n)
+        };
+        assert_eq!(
+            (first.particles, first.springs, first.triangles),
+            (second.particles, second.springs, second.triangles)
+        );
+        assert_ne!(first, second);
+        let mut nb = MeshNeighbours::default();
+        nb.update_for(wide.topology(), first);
+        // Particle 1's partner below it: 9 in rows of eight, 7 in rows of
+        // six.
+        assert!(nb.joined_to(1).contains(&9) && !nb.joined_to(1).contains(&7));
+        nb.update_for(tall.topology(), second);
+        let mut fresh = MeshNeighbours::default();
+        fresh.update(tall.topology(), n);
+        for p in 0..n as u32 {
+            assert_eq!(nb.joined_to(p), fresh.joined_to(p), "particle {p}");
+        }
+    }
 
     /// On a grid: the corner's partners are its stretch, shear and bend
     /// springs' far ends; a particle three cells away is no neighbour of a

@@ -52,7 +52,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::motion_tiles::MotionTiles;
-use super::neighbours::{MeshNeighbours, Sheet};
+use super::neighbours::{MeshNeighbours, Sheet, TopologyKey};
 use super::patches::Patches;
 use super::spatial_hash::SpatialHash;
 use crate::cloth::{Particles, Topology};
@@ -1055,8 +1055,10 @@ impl SelfContacts {
         basis: &LookBasis,
         team: Team,
     ) {
-        self.neighbours.update(basis.topology, basis.particles);
-        self.tiles.update(basis.topology, basis.particles);
+        // One pass over the triangles keys both.
+        let key = TopologyKey::of(basis.topology, basis.particles);
+        self.neighbours.update_for(basis.topology, key);
+        self.tiles.update(basis.topology, key);
         self.margin = basis.margin.max(1.0e-4);
         let Some(last) = look.as_ref() else {
             return;
