@@ -102,6 +102,8 @@ struct Showcase {
     help: bool,
     message: String,
     step_ms: f64,
+    /// The last step's self-collision and its looks for pairs (ms).
+    self_ms: (f64, f64),
     /// Substeps the last step took (automatic ones depend on the obstacles
     /// near the cloth); 0 before the first.
     substeps: u32,
@@ -177,6 +179,7 @@ async fn interactive(source: String, options: SceneOptions) {
         help: true,
         message: String::new(),
         step_ms: 0.0,
+        self_ms: (0.0, 0.0),
         substeps: 0,
         frame_ms: 0.0,
     };
@@ -360,7 +363,11 @@ async fn interactive(source: String, options: SceneOptions) {
         if !app.paused || step_once {
             let start = std::time::Instant::now();
             match app.scene.step_frame() {
-                Ok(report) => app.substeps = report.substeps,
+                Ok(report) => {
+                    app.substeps = report.substeps;
+                    let t = report.times;
+                    app.self_ms = (1000.0 * t.self_collision, 1000.0 * t.self_looks);
+                }
                 Err(e) => {
                     app.message = e.to_string();
                     app.paused = true;
@@ -401,9 +408,17 @@ fn overlay_text(window: &mut Window, font: &std::sync::Arc<Font>, app: &Showcase
             cloth.springs().len()
         ),
         format!(
-            "frame {:.1} ms  step {:.2} ms  substeps {}  |  energy {:.3} J (kinetic {:.3})  |  stretch {:.2}%{}",
+            "frame {:.1} ms  step {:.2} ms{}  substeps {}  |  energy {:.3} J (kinetic {:.3})  |  stretch {:.2}%{}",
             app.frame_ms,
             app.step_ms,
+            if cloth.params.self_collision {
+                format!(
+                    " (self-collision {:.2}, its looks {:.2})",
+                    app.self_ms.0, app.self_ms.1
+                )
+            } else {
+                String::new()
+            },
             if app.substeps > 0 {
                 app.substeps
             } else {

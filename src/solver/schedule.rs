@@ -402,9 +402,11 @@ impl ClothSolver {
                 let thickness = layer;
                 let look = &mut self.state.self_look;
                 if selfc.due(look, &cloth.particles.x) {
+                    let looked = std::time::Instant::now();
                     let basis = look_basis(cloth, thickness);
                     selfc.find(look, &cloth.particles.x, &basis, self_team);
                     report.self_looks += 1;
+                    times.self_looks += looked.elapsed().as_secs_f64();
                 }
                 // The positions before the pass, to tell which it moves.
                 if watch_moves {

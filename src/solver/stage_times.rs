@@ -16,6 +16,11 @@ pub struct StageTimes {
     pub integrate: f64,
     /// Self-collision: the look for close pairs and their pass (s).
     pub self_collision: f64,
+    /// Of `self_collision`, the looks for pairs (s): the `stack` spends
+    /// most of its frame in them, and a look's share tells whether the
+    /// cloth's parts near each other move (BENCHMARKS.md).
+    #[serde(default)]
+    pub self_looks: f64,
     /// The stretch limit and tethers run between integration and contacts (s).
     pub constraints: f64,
     /// The obstacles: their motion, contact detection and resolution, the
