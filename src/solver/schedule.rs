@@ -297,24 +297,6 @@ impl ClothSolver {
         // with every integrator, unless an explicit one runs past its
         // stability limit (that run must still diverge and say so).
         let follows = relaxed_limit || limits_itself;
-        // Self-collision's looks and passes share the team from a few
-        // thousand particles ([`shares_well`]); the small-steps solver's
-        // own loops only from where they gain from it without
-        // self-collision ([`lanes_share`]): a substep's dozen short loops
-        // over 2–4 thousand particles lost more to the handouts than the
-        // second thread gave (`stack`, two threads, five alternated runs:
-        // its loops 2.8 → 1.6 ms a frame, the frame 11.4 → 10.0 ms;
-        // `fold` 2.65 → 2.50; the same bits).
-        let busy = edges_near || self.workspace.touched_last_step;
-        let self_team = team;
-        let team = if self.settings.integrator == Integrator::Xpbd
-            && cloth.params.self_collision
-            && !lanes_share(cloth, busy)
-        {
-            Team::ALONE
-        } else {
-            team
-        };
         let ws = &mut self.workspace;
         let mut report = StepReport {
             substeps: k,
@@ -404,7 +386,7 @@ impl ClothSolver {
                 if selfc.due(look, &cloth.particles.x) {
                     let looked = std::time::Instant::now();
                     let basis = look_basis(cloth, thickness);
-                    selfc.find(look, &cloth.particles.x, &basis, self_team);
+                    selfc.find(look, &cloth.particles.x, &basis, team);
                     report.self_looks += 1;
                     times.self_looks += looked.elapsed().as_secs_f64();
                 }
@@ -421,7 +403,7 @@ impl ClothSolver {
                         friction: cloth.params.self_friction,
                         h,
                     },
-                    self_team,
+                    team,
                 );
                 report.self_contacts += self_touching;
                 watch.lap(&mut times.self_collision);
@@ -605,23 +587,16 @@ const TEAM_MIN_PARTICLES: usize = 2048;
 /// [`XPBD_BUSY_TEAM_MIN_PARTICLES`] in a `busy` step (one near an
 /// obstacle's edges, or after a step that touched an obstacle).
 fn shares_well(cloth: &Cloth, integrator: Integrator, busy: bool) -> bool {
+    let n = cloth.particle_count();
     if integrator == Integrator::Xpbd && !cloth.params.self_collision {
-        return lanes_share(cloth, busy);
+        let least = if busy {
+            XPBD_BUSY_TEAM_MIN_PARTICLES
+        } else {
+            XPBD_TEAM_MIN_PARTICLES
+        };
+        return lane_grid(cloth).is_some() && n >= least;
     }
-    cloth.particle_count() >= TEAM_MIN_PARTICLES
-}
-
-/// True when the small-steps solver's loops over `cloth` gain from a team
-/// of threads: a cloth with lanes of [`XPBD_TEAM_MIN_PARTICLES`]
-/// particles or more, or [`XPBD_BUSY_TEAM_MIN_PARTICLES`] in a `busy`
-/// step.
-fn lanes_share(cloth: &Cloth, busy: bool) -> bool {
-    let least = if busy {
-        XPBD_BUSY_TEAM_MIN_PARTICLES
-    } else {
-        XPBD_TEAM_MIN_PARTICLES
-    };
-    lane_grid(cloth).is_some() && cloth.particle_count() >= least
+    n >= TEAM_MIN_PARTICLES
 }
 
 /// Particles from which the small-steps solver shares the step of a grid
