@@ -353,6 +353,34 @@ fn a_step_reports_where_its_time_went() {
     assert!(seen.integrate > 0.0 && seen.contacts > 0.0, "{seen:?}");
 }
 
+#[test]
+fn a_step_with_self_collision_reports_its_looks_within_its_time() {
+    // The fold at 24 × 24: its halves meet under the bar, and a step that
+    // looks for pairs spends part of its self-collision time on it.
+    let options = SceneOptions {
+        n: Some(24),
+        ..Default::default()
+    };
+    let mut scene = Scene::build(SceneKind::Fold, &options).unwrap();
+    let (mut looked, mut without) = (0, 0);
+    for _ in 0..60 {
+        let report = scene.step_frame().unwrap();
+        let t = report.times;
+        assert!(t.self_looks <= t.self_collision, "{t:?}");
+        if report.self_looks > 0 {
+            assert!(t.self_looks > 0.0, "{report:?}");
+            looked += 1;
+        } else {
+            assert_eq!(t.self_looks, 0.0, "{report:?}");
+            without += 1;
+        }
+    }
+    assert!(
+        looked > 0 && without > 0,
+        "{looked} steps looked, {without} did not"
+    );
+}
+
 /// A 40×40 cotton sheet, 0.6 m a side, lying flat 2 mm above the
 /// thickness over the top of a cuboid whose top is at y = 0 (fine enough
 /// that the sweeps alone would take more than 32 substeps a frame, more
