@@ -54,6 +54,45 @@ pub(crate) unsafe fn load_vectors(
     ]
 }
 
+/// Eight vectors' dot products with eight others, each given as a
+/// register of x, one of y and one of z: `(u.x v.x + u.y v.y) + u.z v.z`,
+/// as `Vector::dot` sums them (the same bits lane by lane).
+///
+/// # Safety
+/// The CPU has AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(crate) unsafe fn dot_lanes(
+    u: [std::arch::x86_64::__m256; 3],
+    v: [std::arch::x86_64::__m256; 3],
+) -> std::arch::x86_64::__m256 {
+    use std::arch::x86_64::*;
+    let m = |p, q| _mm256_mul_ps(p, q);
+    _mm256_add_ps(_mm256_add_ps(m(u[0], v[0]), m(u[1], v[1])), m(u[2], v[2]))
+}
+
+/// Eight vectors' cross products `u × v`, coordinates as in
+/// [`dot_lanes`], as `Vector::cross` forms them (the same bits).
+///
+/// # Safety
+/// The CPU has AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(crate) unsafe fn cross_lanes(
+    u: [std::arch::x86_64::__m256; 3],
+    v: [std::arch::x86_64::__m256; 3],
+) -> [std::arch::x86_64::__m256; 3] {
+    use std::arch::x86_64::*;
+    let m = |p, q| _mm256_mul_ps(p, q);
+    [
+        _mm256_sub_ps(m(u[1], v[2]), m(v[1], u[2])),
+        _mm256_sub_ps(m(u[2], v[0]), m(v[2], u[0])),
+        _mm256_sub_ps(m(u[0], v[1]), m(v[0], u[1])),
+    ]
+}
+
 /// Aligns the stack frame of the function it is inlined into to a cache
 /// line: the first statement of each AVX2 kernel that keeps vectors on
 /// its stack. Rust keeps the stack 16-byte aligned, and the 32-byte

@@ -57,7 +57,7 @@ use super::patches::Patches;
 use super::spatial_hash::SpatialHash;
 use crate::cloth::{Particles, Topology};
 #[cfg(target_arch = "x86_64")]
-use crate::math::load_vectors;
+use crate::math::{cross_lanes, dot_lanes, load_vectors};
 use crate::math::{simd_available, Vector, VECTOR_F32S};
 use crate::parallel::{Disjoint, Team};
 
@@ -249,14 +249,8 @@ impl PairLanes {
             let (e1, e2, d) = (sub(b, a), sub(c, a), sub(p, a));
             // e1 × e2, as `Vector::cross`.
             let m = _mm256_mul_ps;
-            let normal = [
-                _mm256_sub_ps(m(e1[1], e2[2]), m(e2[1], e1[2])),
-                _mm256_sub_ps(m(e1[2], e2[0]), m(e2[2], e1[0])),
-                _mm256_sub_ps(m(e1[0], e2[1]), m(e2[0], e1[1])),
-            ];
-            let dot = |u: [__m256; 3], v: [__m256; 3]| {
-                _mm256_add_ps(_mm256_add_ps(m(u[0], v[0]), m(u[1], v[1])), m(u[2], v[2]))
-            };
+            let normal = cross_lanes(e1, e2);
+            let dot = |u: [__m256; 3], v: [__m256; 3]| dot_lanes(u, v);
             let len2 = dot(normal, normal);
             let side = _mm256_loadu_ps(self.side.as_ptr().add(k));
             let out = m(dot(d, normal), side);
@@ -1028,16 +1022,11 @@ impl Look<'_> {
         // product but for its sign, `s` and `1 − t`, the same gap's size).
         let splat = |r: f32| _mm256_set1_ps(r);
         let m = |p, q| _mm256_mul_ps(p, q);
-        let (sub, add) = (|p, q| _mm256_sub_ps(p, q), |p, q| _mm256_add_ps(p, q));
+        let sub = |p, q| _mm256_sub_ps(p, q);
         let v = [0, 1, 2].map(|c| sub(f[c], splat(e[c])));
         let (u, w) = (u.to_array().map(splat), (a - xe).to_array().map(splat));
-        let dot =
-            |p: [__m256; 3], q: [__m256; 3]| add(add(m(p[0], q[0]), m(p[1], q[1])), m(p[2], q[2]));
-        let cross = [
-            sub(m(u[1], v[2]), m(v[1], u[2])),
-            sub(m(u[2], v[0]), m(v[2], u[0])),
-            sub(m(u[0], v[1]), m(v[0], u[1])),
-        ];
+        let dot = |p: [__m256; 3], q: [__m256; 3]| dot_lanes(p, q);
+        let cross = cross_lanes(u, v);
         let len2 = dot(cross, cross);
         let (uu, uv, vv, uw, vw) = (dot(u, u), dot(u, v), dot(v, v), dot(u, w), dot(v, w));
         let tol = 1.0e-3;
