@@ -198,39 +198,23 @@ impl PairLanes {
         self.simd && !self.broken && self.len == pairs && self.particles == particles && pairs > 0
     }
 
-    /// Which of the eight pairs from `k` the pass may act on at positions
-    /// `x`, for layers `(thickness, margin)` (m), as bits (bit `j` for pair
-    /// `k + j`): those not idle by [`SelfContacts::pair_pass`]'s tests up
-    /// to the barycentrics, each made a hair looser; every pair there is
-    /// without the lanes.
-    fn busy(&self, k: usize, x: &Points, layers: (f32, f32)) -> u32 {
+    /// The first of the eight pairs from `k` that the pass may act on at
+    /// positions `x`, for layers `(thickness, margin)` (m): not idle by
+    /// [`SelfContacts::pair_pass`]'s tests up to the barycentrics, each
+    /// made a hair looser; [`LANES`] when all are idle.
+    fn first_busy(&self, k: usize, x: &Points, layers: (f32, f32)) -> usize {
         #[cfg(target_arch = "x86_64")]
         if self.usable(self.len, x.len) && k < self.len {
             // SAFETY: usable only with AVX2, with every index below
             // `x.len`, and `k` a pair's; the pairs' particles are this
             // part's.
-            return unsafe { self.busy_avx2(k, x, layers) };
+            return unsafe { self.first_busy_avx2(k, x, layers) };
         }
-        let _ = (x, layers);
-        let left = self.len.saturating_sub(k).min(LANES);
-        (1u32 << left) - 1
+        let _ = (k, x, layers);
+        0
     }
 
-    /// Which of the eight pairs from `k` have a particle (their own or a
-    /// corner) among `moved`, as bits (bit `j` for pair `k + j`).
-    fn sharing(&self, k: usize, moved: [u32; 4]) -> u32 {
-        let mut bits = 0;
-        let end = (k + LANES).min(self.len);
-        let ours = |i: i32| moved.contains(&(i as u32));
-        for i in k..end {
-            if ours(self.p[i]) || self.corners.iter().any(|c| ours(c[i])) {
-                bits |= 1 << (i - k);
-            }
-        }
-        bits
-    }
-
-    /// [`Self::busy`] in AVX2.
+    /// [`Self::first_busy`] in AVX2.
     ///
     /// # Safety
     /// The CPU has AVX2; the lanes' indices are below `x.len`; `k` is
@@ -238,7 +222,12 @@ impl PairLanes {
     /// pairs meanwhile.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn busy_avx2(&self, k: usize, x: &Points, (thickness, margin): (f32, f32)) -> u32 {
+    unsafe fn first_busy_avx2(
+        &self,
+        k: usize,
+        x: &Points,
+        (thickness, margin): (f32, f32),
+    ) -> usize {
         use std::arch::x86_64::*;
         assert!(k + LANES <= self.p.len() && self.p.len() == self.side.len());
         assert!(self.corners.iter().all(|c| c.len() == self.p.len()));
@@ -323,7 +312,12 @@ impl PairLanes {
             let lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
             let left = _mm256_set1_epi32((self.len - k).min(LANES) as i32);
             let real = _mm256_castsi256_ps(_mm256_cmpgt_epi32(left, lane));
-            _mm256_movemask_ps(_mm256_andnot_ps(idle, real)) as u32
+            let bits = _mm256_movemask_ps(_mm256_andnot_ps(idle, real)) as u32;
+            if bits == 0 {
+                LANES
+            } else {
+                bits.trailing_zeros() as usize
+            }
         }
     }
 }
@@ -1376,43 +1370,18 @@ impl SelfContacts {
         let n = pairs.len();
         let layers = (params.thickness, self.margin);
         if lanes.usable(n, x.len) {
-            // Eight pairs at a time: a vector test finds those the pass
-            // may act on; the others would change nothing and are passed
-            // over. Each it finds takes the pass in order, from the
-            // positions the pairs before it left: the bits of the pass one
-            // pair at a time.
+            // Eight pairs at a time: a vector test finds the first the
+            // pass may act on; those before it would change nothing and
+            // are passed over, and from it to the eighth each takes the
+            // pass one at a time (from positions the pairs before moved):
+            // the bits of the pass one pair at a time.
             for k in (0..n).step_by(LANES) {
-                let mut busy = lanes.busy(k, x, layers);
-                if busy != 0 {
+                let first = lanes.first_busy(k, x, layers);
+                if first < LANES {
                     near = None;
-                }
-                while busy != 0 {
-                    let j = busy.trailing_zeros();
-                    let moved = self.pair_pass(
-                        &pairs[k + j as usize],
-                        &mut near,
-                        (x, v, inv_mass),
-                        (topology, params),
-                    );
-                    touching += moved;
-                    busy &= busy - 1;
-                    if moved != 0 {
-                        // It moved its particle and its triangle's corners:
-                        // the pairs after it with one of those may act
-                        // now, and take the test again (the others' tests
-                        // read none of them). Testing only those it left
-                        // busy, the pass took 8 M pairs one at a time over
-                        // the `stack`'s run, most to find them apart; now
-                        // 2 M, nearly all acting.
-                        let pair = &pairs[k + j as usize];
-                        let later = u32::MAX << (j + 1);
-                        let shared = match topology.triangles.get(pair.triangle as usize) {
-                            Some(&[a, b, c]) => lanes.sharing(k, [pair.particle, a, b, c]),
-                            None => later,
-                        };
-                        if shared & later != 0 {
-                            busy = lanes.busy(k, x, layers) & later;
-                        }
+                    for pair in &pairs[k + first..(k + LANES).min(n)] {
+                        touching +=
+                            self.pair_pass(pair, &mut near, (x, v, inv_mass), (topology, params));
                     }
                 }
             }
