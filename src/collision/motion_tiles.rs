@@ -17,7 +17,9 @@
 //! the boxes around two tiles' reaches within that distance of each other
 //! now: if every two such tiles' particles have moved apart by at most the
 //! margin since the look (the diagonal of the box around their motions),
-//! the look's pairs still hold. The same for the border edges' pairs. The
+//! the look's pairs still hold. The same for the edge pairs of the border
+//! and of the folds the look found sharp (which folds are sharp is the
+//! look's: one that sharpens later waits for the next). The
 //! whole cloth's test ([`super::SelfContacts::due`]) bounds every two
 //! particles' motion; this one only those near each other, which spares
 //! the looks of a cloth whose far parts move apart (the `stack`, whose

@@ -5,7 +5,8 @@
 //! a corner or shares a triangle edge with one. Self-collision leaves only
 //! adjacent pairs to the springs (and, on a grid, the smooth sheet around
 //! each triangle); the self-intersection count skips near ones. Also the
-//! triangles' edges, once each.
+//! triangles' edges, once each: those of one triangle (the border) and
+//! those between two, with their two triangles.
 
 use crate::cloth::{SpringKind, Topology};
 
@@ -32,6 +33,10 @@ pub(crate) struct MeshNeighbours {
     longest: f32,
     /// The cloth's border edges (lower index first), ascending.
     border_edges: Vec<[u32; 2]>,
+    /// The edges between two triangles (lower index first), ascending.
+    inner_edges: Vec<[u32; 2]>,
+    /// The two triangles of each of `inner_edges`.
+    inner_faces: Vec<[u32; 2]>,
     /// For a grid cloth: each particle's place in the rest shape (m, along
     /// a row and along a column), from which rest distances follow; empty
     /// off a grid.
@@ -114,20 +119,31 @@ impl MeshNeighbours {
         });
         (self.edge_start, self.edges) = compressed(n, edges.clone());
         (self.ring_start, self.ring) = compressed(n, edges.flat_map(|(a, b)| [(a, b), (b, a)]));
-        let mut all: Vec<(u32, u32)> = topology
+        // Each triangle edge with its triangle, by edge: an edge met once
+        // is a border edge, twice an inner one (more often, neither).
+        let mut all: Vec<([u32; 2], u32)> = topology
             .triangles
             .iter()
-            .flat_map(|t| {
-                [(t[1], t[2]), (t[2], t[0]), (t[0], t[1])].map(|(a, b)| (a.min(b), a.max(b)))
+            .enumerate()
+            .flat_map(|(t, c)| {
+                [(c[1], c[2]), (c[2], c[0]), (c[0], c[1])]
+                    .map(|(a, b)| ([a.min(b), a.max(b)], t as u32))
             })
             .collect();
         all.sort_unstable();
-        self.border_edges = all
-            .iter()
-            .enumerate()
-            .filter(|&(k, e)| all.get(k + 1) != Some(e) && (k == 0 || all[k - 1] != *e))
-            .map(|(_, &(a, b))| [a, b])
-            .collect();
+        self.border_edges.clear();
+        self.inner_edges.clear();
+        self.inner_faces.clear();
+        for run in all.chunk_by(|a, b| a.0 == b.0) {
+            match run {
+                [(edge, _)] => self.border_edges.push(*edge),
+                [(edge, t0), (_, t1)] => {
+                    self.inner_edges.push(*edge);
+                    self.inner_faces.push([*t0, *t1]);
+                }
+                _ => {}
+            }
+        }
         let spacing = topology.grid.and_then(|g| {
             let rest = |a: usize, b: usize| {
                 (0..springs.len())
@@ -182,6 +198,12 @@ impl MeshNeighbours {
         &self.border_edges
     }
 
+    /// The edges between two triangles (lower index first, ascending), and
+    /// the two triangles of each.
+    pub fn inner_edges(&self) -> (&[[u32; 2]], &[[u32; 2]]) {
+        (&self.inner_edges, &self.inner_faces)
+    }
+
     /// The particles of the same smooth sheet as triangle `tri`: on a
     /// grid cloth, those closer than `radius` metres to one of its corners
     /// in the rest shape (none off a grid). Such a particle can only come
@@ -210,6 +232,18 @@ impl MeshNeighbours {
     /// The far ends `j > p` of the triangle edges at `p`, ascending.
     pub fn edges_from(&self, p: u32) -> &[u32] {
         row(&self.edge_start, &self.edges, p)
+    }
+
+    /// The triangle edges, once each: how many.
+    pub fn edge_count(&self) -> usize {
+        self.edges.len()
+    }
+
+    /// Where the triangle edge `[p, q]` (`p < q`) is among the edges (below
+    /// [`Self::edge_count`]), if it is one.
+    pub fn edge_index(&self, [p, q]: [u32; 2]) -> Option<usize> {
+        let start = *self.edge_start.get(p as usize)? as usize;
+        Some(start + self.edges_from(p).binary_search(&q).ok()?)
     }
 }
 
@@ -314,6 +348,17 @@ mod tests {
         assert!(nb.border_edges().contains(&[0, 1]) && nb.border_edges().contains(&[19, 24]));
         // 4×4 cells of two triangles: 2·5·4 grid edges and 16 diagonals.
         assert_eq!(edges, 2 * 5 * 4 + 16);
+        // The rest lie between two triangles, each of which has the edge.
+        let (inner, faces) = nb.inner_edges();
+        assert_eq!(inner.len() + nb.border_edges().len(), edges);
+        assert!(inner.windows(2).all(|w| w[0] < w[1]));
+        for (&[a, b], &[t0, t1]) in inner.iter().zip(faces) {
+            let tris = cloth.triangles();
+            assert!(t0 != t1);
+            for t in [t0, t1] {
+                assert!(tris[t as usize].contains(&a) && tris[t as usize].contains(&b));
+            }
+        }
     }
 }
 
