@@ -965,17 +965,25 @@ impl Look<'_> {
             return;
         }
         let (xp, xq) = (x[p as usize], x[q as usize]);
-        let Some((s, t, n)) = closest(a, u, xp, xq - xp) else {
-            return;
-        };
-        let gap = (a + u * s - xp - (xq - xp) * t).dot(n);
-        if gap.abs() < self.reach {
-            out.push(EdgePair {
-                edge: [ia, ib],
-                other: [p, q],
-                side: if gap >= 0.0 { 1.0 } else { -1.0 },
-            });
-        }
+        out.extend(self.within_reach(([ia, ib], a, u), ([p, q], xp, xq - xp)));
+    }
+
+    /// The pair of `edge` (from `a` along `u`, m) and `other` (from `p`
+    /// along `v`) when their closest points lie inside both and within
+    /// reach, with the side `edge` lies on.
+    #[inline(always)]
+    fn within_reach(
+        &self,
+        (edge, a, u): ([u32; 2], Vector, Vector),
+        (other, p, v): ([u32; 2], Vector, Vector),
+    ) -> Option<EdgePair> {
+        let (s, t, n) = closest(a, u, p, v)?;
+        let gap = (a + u * s - p - v * t).dot(n);
+        (gap.abs() < self.reach).then(|| EdgePair {
+            edge,
+            other,
+            side: if gap >= 0.0 { 1.0 } else { -1.0 },
+        })
     }
 
     /// The pair of a sharp fold's `edge` with another fold's edge `other`,
@@ -996,17 +1004,7 @@ impl Look<'_> {
         };
         let [a, b] = first.map(|i| x[i as usize]);
         let [p, q] = second.map(|i| x[i as usize]);
-        let Some((s, t, n)) = closest(a, b - a, p, q - p) else {
-            return;
-        };
-        let gap = (a + (b - a) * s - p - (q - p) * t).dot(n);
-        if gap.abs() < self.reach {
-            out.push(EdgePair {
-                edge: first,
-                other: second,
-                side: if gap >= 0.0 { 1.0 } else { -1.0 },
-            });
-        }
+        out.extend(self.within_reach((first, a, b - a), (second, p, q - p)));
     }
 
     /// Which of the edges from `xe` to the particles `ends` (at most
@@ -1368,11 +1366,10 @@ impl SelfContacts {
             headroom(&mut list.0);
         }
         // Two folds' edges near each other are found from both: once, in
-        // the order of their edges whatever the blocks.
-        let folds = &mut self.edge_pairs[first_fold..];
-        folds.sort_unstable_by_key(|e| (e.edge, e.other));
-        let kept = first_fold + dedup_sorted(folds);
-        self.edge_pairs.truncate(kept);
+        // the order of their edges whatever the blocks. (The border's
+        // pairs before them are each found once: the dedup leaves them.)
+        self.edge_pairs[first_fold..].sort_unstable_by_key(|e| (e.edge, e.other));
+        self.edge_pairs.dedup_by_key(|e| (e.edge, e.other));
         headroom(&mut self.edge_pairs);
     }
 
@@ -1777,20 +1774,6 @@ fn clamped([u, v, w]: [f32; 3]) -> [f32; 3] {
     [u / sum, v / sum, w / sum]
 }
 
-/// Moves the first of each run of equal edge pairs (`pairs` sorted by
-/// edges) to the front; returns how many there are.
-fn dedup_sorted(pairs: &mut [EdgePair]) -> usize {
-    let mut kept = 0;
-    for k in 0..pairs.len() {
-        let key = |e: &EdgePair| (e.edge, e.other);
-        if kept == 0 || key(&pairs[kept - 1]) != key(&pairs[k]) {
-            pairs[kept] = pairs[k];
-            kept += 1;
-        }
-    }
-    kept
-}
-
 /// Sorts a few pairs by particle (the pairs of one triangle: a handful).
 fn insertion_sort(pairs: &mut [SelfPair]) {
     for i in 1..pairs.len() {
@@ -2193,20 +2176,15 @@ mod tests {
     fn sharp_folds_keep_crossing_creases_apart() {
         let (cloth, x) = crossing_creases(0.003);
         let contacts = looked_at(&cloth, &x, false);
-        let crease = EdgePair {
-            edge: [12, 13],
-            other: [25 + 7, 25 + 12],
-            side: 1.0,
-        };
+        let crease = ([12, 13], [25 + 7, 25 + 12]);
         assert!(
             contacts
                 .edge_pairs
                 .iter()
-                .any(|e| (e.edge, e.other) == (crease.edge, crease.other)),
+                .any(|e| (e.edge, e.other) == crease),
             "{:?}",
             contacts.edge_pairs
         );
-        // Every face pair apart: only the edges meet.
         let params = SelfContactParams {
             thickness: LAYERS,
             friction: 0.0,
