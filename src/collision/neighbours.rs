@@ -2,11 +2,13 @@
 //! and a triangle are *near* when the particle is a corner of the triangle
 //! or is joined by a spring (stretch, shear or bend) to one of its corners
 //! (on a grid, every particle within two cells), and *adjacent* when it is
-//! a corner or shares a triangle edge with one. Self-collision leaves only
-//! adjacent pairs to the springs (and, on a grid, the smooth sheet around
-//! each triangle); the self-intersection count skips near ones. Also the
-//! triangles' edges, once each: those of one triangle (the border) and
-//! those between two, with their two triangles.
+//! a corner or shares a triangle edge with one. Self-collision leaves a
+//! triangle's corners to the springs, and off a grid its adjacent
+//! particles too ([`MeshNeighbours::left_to_springs`]; on a single grid,
+//! the smooth sheet around each triangle as well); the self-intersection
+//! count skips near ones. Also the triangles' edges, once each: those of
+//! one triangle (the border) and those between two, with their two
+//! triangles.
 
 use crate::cloth::{SpringKind, Topology};
 
@@ -41,6 +43,8 @@ pub(crate) struct MeshNeighbours {
     /// a row and along a column), from which rest distances follow; empty
     /// off a grid.
     rest: Vec<[f32; 2]>,
+    /// Per particle: of a grid (the cloth's, or a joined piece's).
+    on_grid: Vec<bool>,
     /// What the lists were made from.
     made_for: Option<TopologyKey>,
 }
@@ -163,6 +167,15 @@ impl MeshNeighbours {
             .chain(springs.range(SpringKind::Shear))
             .map(|s| springs.rest[s])
             .fold(0.0f32, f32::max);
+        self.on_grid.clear();
+        self.on_grid.resize(n, false);
+        for piece in topology.grid_pieces() {
+            let particles = piece.particles();
+            let end = particles.end.min(n);
+            if let Some(on) = self.on_grid.get_mut(particles.start.min(end)..end) {
+                on.fill(true);
+            }
+        }
         self.made_for = Some(key);
     }
 
@@ -186,6 +199,26 @@ impl MeshNeighbours {
         }
         let ring = row(&self.ring_start, &self.ring, p);
         tri.iter().any(|c| ring.binary_search(c).is_ok())
+    }
+
+    /// True when self-collision leaves particle `p` and triangle `tri` to
+    /// the springs: `p` is a corner of `tri`, or `tri` lies off a grid and
+    /// `p` is [`Self::adjacent`] to it. On a grid, a particle of a
+    /// corner's one-ring lies a whole cell beyond the triangle's nearer
+    /// edge in the rest shape (the altitude onto a cell's diagonal is at
+    /// least its shorter side over √2), never within the rim the pass
+    /// acts in (at most a quarter of the shortest edge): its pair acts
+    /// only where the cloth folds over at that corner, as a border's pleat
+    /// two cells wide did, crossing the `stack` at 20 substeps with no
+    /// pair to stop it. Off a grid, a one-ring particle of a sliver
+    /// triangle may lie within the rim of a flat cloth: left to the
+    /// springs.
+    pub fn left_to_springs(&self, p: u32, tri: [u32; 3]) -> bool {
+        if tri.contains(&p) {
+            return true;
+        }
+        let on_grid = |c: u32| self.on_grid.get(c as usize).copied().unwrap_or(false);
+        !tri.iter().all(|&c| on_grid(c)) && self.adjacent(p, tri)
     }
 
     /// The longest stretch or shear spring's rest length, in metres.
@@ -311,6 +344,43 @@ mod tests {
         fresh.update(tall.topology(), n);
         for p in 0..n as u32 {
             assert_eq!(nb.joined_to(p), fresh.joined_to(p), "particle {p}");
+        }
+    }
+
+    /// A triangle's corners are left to the springs everywhere; its
+    /// one-ring only off a grid: a joined grid's piece leaves it to the
+    /// pairs, a mesh of the same quads to the springs.
+    #[test]
+    fn the_springs_keep_a_triangles_one_ring_off_a_grid_only() {
+        use crate::cloth::{Cloth, ClothMesh, MassSpec, Material};
+        let sheet = ClothBuilder::new(5, 5).build().unwrap();
+        let joined = Cloth::join(vec![sheet.clone(); 2]).unwrap();
+        let faces = (0..4u32)
+            .flat_map(|r| (0..4u32).map(move |c| r * 5 + c))
+            .map(|i| vec![i, i + 5, i + 6, i + 1])
+            .collect();
+        let mesh = ClothMesh {
+            positions: sheet.positions().to_vec(),
+            faces,
+            uvs: Vec::new(),
+        };
+        let mesh = Cloth::from_mesh(&mesh, Material::cotton(), MassSpec::FromDensity).unwrap();
+        for (cloth, on_grid) in [(&joined, true), (&mesh, false)] {
+            let mut nb = MeshNeighbours::default();
+            nb.update(cloth.topology(), cloth.particle_count());
+            // A triangle at particle 6 without particle 7, its partner
+            // along the row.
+            let &tri = cloth
+                .topology()
+                .triangles
+                .iter()
+                .find(|t| t.contains(&6) && !t.contains(&7))
+                .expect("a triangle at 6");
+            assert!(nb.adjacent(7, tri));
+            assert!(nb.left_to_springs(tri[0], tri));
+            assert_eq!(nb.left_to_springs(7, tri), !on_grid, "on a grid: {on_grid}");
+            // Particles beyond the one-ring: the pairs' either way.
+            assert!(!nb.left_to_springs(24, tri));
         }
     }
 

@@ -1,7 +1,9 @@
 //! Self-collision: particles kept a layer's thickness
 //! ([`crate::cloth::Cloth::self_thickness`]) away from the triangles of
-//! their own cloth that are not their neighbours in the rest mesh
-//! ([`MeshNeighbours`]), with Coulomb friction between the layers.
+//! their own cloth that the springs do not hold them to: not their
+//! corners, nor off a grid their neighbours in the rest mesh
+//! ([`MeshNeighbours::left_to_springs`]), with Coulomb friction between
+//! the layers.
 //!
 //! Found ahead, solved every substep (as the obstacles are): a spatial
 //! hash of the particles ([`SpatialHash`]) gives each triangle the
@@ -630,7 +632,8 @@ impl Look<'_> {
     }
 
     /// The pair of particle `p` at `xp` (m) with the triangle `f`, if it
-    /// lies within reach of it, outside its sheet and not its neighbour.
+    /// lies within reach of it, outside its sheet and not left to the
+    /// springs ([`MeshNeighbours::left_to_springs`]).
     #[inline(always)]
     fn pair(
         &self,
@@ -644,7 +647,7 @@ impl Look<'_> {
         }
         let [u, v, w] = barycentric(xp - f.n * d - f.a, f.e1, f.e2);
         let slack = f.slack;
-        if u < -slack[0] || v < -slack[1] || w < -slack[2] || neighbours.adjacent(p, f.tri) {
+        if u < -slack[0] || v < -slack[1] || w < -slack[2] || neighbours.left_to_springs(p, f.tri) {
             return None;
         }
         Some(SelfPair {
@@ -2216,6 +2219,79 @@ mod tests {
         let x = flat.positions().to_vec();
         let contacts = looked_at(&flat, &x, false);
         assert!(contacts.folds.is_empty());
+    }
+
+    /// Two 5 × 5 sheets of 10 mm cells joined into one cloth (no sheet
+    /// shortcut: a grid's one-ring is paired), flat, the second 8 mm over
+    /// the first (within reach, beyond the thickness: the first is looked
+    /// at, and no pair between them acts).
+    fn joined_fine_sheets() -> (crate::cloth::Cloth, Vec<Vector>) {
+        let sheet = ClothBuilder::new(5, 5).size(0.04, 0.04).build().unwrap();
+        let cloth = crate::cloth::Cloth::join(vec![sheet; 2]).unwrap();
+        let x = cloth
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| Vector::new(p.x, if i < 25 { 0.0 } else { 0.008 }, p.z))
+            .collect();
+        (cloth, x)
+    }
+
+    /// A border folded over at a particle is paired with the triangles of
+    /// that particle it lies over, though it is their corner's neighbour,
+    /// and the pass keeps it on its side; a flat grid's one-ring pairs
+    /// (within the look's slack at 10 mm cells) never act.
+    #[test]
+    fn a_border_folded_over_at_a_corner_keeps_to_its_side() {
+        let (cloth, flat) = joined_fine_sheets();
+        let topology = &*cloth.topology;
+        let params = SelfContactParams {
+            thickness: LAYERS,
+            friction: 0.0,
+            h: 1.0e-3,
+        };
+        // Flat: pairs of a corner's one-ring exist, and the pass moves
+        // nothing.
+        let contacts = looked_at(&cloth, &flat, false);
+        let one_ring = contacts
+            .all_pairs()
+            .iter()
+            .filter(|p| {
+                let tri = topology.triangles[p.triangle as usize];
+                contacts.neighbours.adjacent(p.particle, tri)
+            })
+            .count();
+        assert!(one_ring > 0, "no one-ring pairs");
+        let mut particles = cloth.particles.clone();
+        particles.x.copy_from_slice(&flat);
+        let touching = contacts.resolve(&mut particles, topology, &params, Team::ALONE);
+        assert_eq!((touching, &particles.x[..]), (0, &flat[..]));
+        // The last row's particle 22 folded back over a triangle at its
+        // neighbour 21 (and not at 22), 3 mm above its centre.
+        let t = topology
+            .triangles
+            .iter()
+            .position(|t| t.contains(&21) && !t.contains(&22) && t.iter().all(|&c| c < 25))
+            .expect("a triangle at 21");
+        let tri = topology.triangles[t];
+        let centre = tri.iter().map(|&c| flat[c as usize]).sum::<Vector>() / 3.0;
+        let mut x = flat.clone();
+        x[22] = centre + Vector::new(0.0, 0.003, 0.0);
+        let contacts = looked_at(&cloth, &x, false);
+        assert!(contacts.all_pairs().contains(&SelfPair {
+            particle: 22,
+            triangle: t as u32,
+            side: 1.0
+        }));
+        // Pulled 1 mm through it, it is pushed back out over a few passes.
+        let mut particles = cloth.particles.clone();
+        particles.x.copy_from_slice(&x);
+        particles.x[22].y = -0.001;
+        for _ in 0..4 {
+            contacts.resolve(&mut particles, topology, &params, Team::ALONE);
+        }
+        let height = particles.x[22].y - particles.x[21].y;
+        assert!(height > 0.5 * LAYERS, "{height} m above the triangle");
     }
 
     /// The pass eight pairs at a time (a vector test passing over the
