@@ -8,7 +8,9 @@ use serde::{Deserialize, Serialize};
 use super::integrator::Integrator;
 use super::report::SolverCounters;
 use super::settings::SolverSettings;
-use super::stability::{chains_lengthen, self_closing_substeps, stable_substeps};
+use super::stability::{
+    chains_lengthen, joined_self_substeps, self_closing_substeps, stable_substeps,
+};
 use super::state::SolverState;
 use super::substeps::{self_collision_substeps, Substeps};
 use super::tearing::TearEvent;
@@ -134,18 +136,20 @@ pub(super) fn substeps_with(settings: &SolverSettings, cloth: &Cloth, dt: f32) -
                 // sweeps' count, or where the chains apply, as many as
                 // keep a layer closing at `SELF_CLOSING_SPEED` within the
                 // thickness a substep (fewer; stability.rs says why).
-                // Not so for cloths joined into one (their grids stacked,
-                // the chains apply): they land on each other, and the
-                // `stack` crossed itself at 16 substeps (5 crossings to
-                // the end), in a frame or a few at 18, 20, 21 and 24, and
-                // never at 17, 19, 22, 23, 25, 26 and the sweeps' 28.
+                // Cloths joined into one (their grids stacked, the chains
+                // apply) land on each other: at least
+                // `JOINED_SELF_SUBSTEPS_PER_SECOND` (the `stack` at 60 Hz:
+                // 24, against the sweeps' 28).
                 let sweeps = stable_substeps(cloth, &unshortened(settings), dt);
                 let joined = cloth.grid().is_none();
-                let stable = if chains_lengthen(cloth, settings) && !joined {
+                let stable = if chains_lengthen(cloth, settings) {
                     let closing = self_closing_substeps(cloth.self_thickness(), dt);
-                    stable_substeps(cloth, settings, dt)
-                        .max(closing)
-                        .min(sweeps)
+                    let least = if joined {
+                        closing.max(joined_self_substeps(dt))
+                    } else {
+                        closing
+                    };
+                    stable_substeps(cloth, settings, dt).max(least).min(sweeps)
                 } else {
                     sweeps
                 };
