@@ -651,7 +651,7 @@ mod tests {
             };
             let (mut contacts, mut look) = (SelfContacts::default(), None);
             contacts.begin_step(&mut look, &basis, Team::ALONE);
-            contacts.find(&mut look, &at, &basis, Team::ALONE);
+            contacts.find(&mut look, (&at, &[], 0.0), &basis, Team::ALONE);
             assert!(!contacts.due(&look, &at), "unmoved");
             assert_eq!(contacts.due(&look, &x), due, "{apart} m apart");
         }

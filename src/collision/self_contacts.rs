@@ -23,7 +23,9 @@
 //! those positions by a solver with fresh scratch, to the same list. The
 //! triangles of quiet patches ([`Patches`]: a bent sheet that cannot touch
 //! itself) are skipped. Each pair keeps the side
-//! of the triangle the particle was on when found. The cloth's border
+//! of the triangle the particle was on a substep before the look (back
+//! along its velocity: a layer that crossed within the substep that asked
+//! for the look is pushed back). The cloth's border
 //! edges are also paired with the other edges near them, so that two
 //! borders cannot slip past each other; and so are the edges of sharp
 //! folds ([`SHARP_FOLD`]), with the edges at the particles paired with
@@ -73,7 +75,8 @@ struct SelfPair {
     particle: u32,
     triangle: u32,
     /// +1 when the particle lay on the side the triangle's normal points
-    /// to, −1 on the other.
+    /// to a substep before the look ([`Look::side_before`]), −1 on the
+    /// other.
     side: f32,
 }
 
@@ -87,7 +90,7 @@ struct EdgePair {
     /// The other edge.
     other: [u32; 2],
     /// +1 when `edge` lay on the side `(b − a) × (q − p)` points to from
-    /// the other edge, −1 on the other.
+    /// the other edge a substep before the look, −1 on the other.
     side: f32,
 }
 
@@ -97,6 +100,11 @@ struct EdgePair {
 pub struct SelfLook {
     /// The particles' positions (m) at the look.
     at: Vec<Vector>,
+    /// Where each particle was a substep before the look (m; its velocity
+    /// back from `at`): the pairs take their sides from these (empty:
+    /// from `at`).
+    #[serde(default)]
+    from: Vec<Vector>,
     /// The layers' thickness and the margin (m) it looked with.
     thickness: f32,
     margin: f32,
@@ -566,6 +574,9 @@ impl Candidates {
 /// One look for pairs: the positions and how far to look.
 struct Look<'a> {
     x: &'a [Vector],
+    /// Where the particles were a substep before (m), for the pairs'
+    /// sides; empty: from `x`.
+    from: &'a [Vector],
     topology: &'a Topology,
     thickness: f32,
     /// Thickness plus margin, in metres.
@@ -653,8 +664,32 @@ impl Look<'_> {
         Some(SelfPair {
             particle: p,
             triangle: f.t,
-            side: if d >= 0.0 { 1.0 } else { -1.0 },
+            side: self
+                .side_before(f.tri, p)
+                .unwrap_or(if d >= 0.0 { 1.0 } else { -1.0 }),
         })
+    }
+
+    /// The side (±1) of triangle `tri` particle `p` lay on a substep
+    /// before the look, if the look knows where and it lay off the
+    /// triangle's plane.
+    #[inline]
+    fn side_before(&self, tri: [u32; 3], p: u32) -> Option<f32> {
+        let from = self.from;
+        let [a, b, c] = tri.map(|i| from.get(i as usize).copied());
+        let (a, b, c, xp) = (a?, b?, c?, from.get(p as usize).copied()?);
+        sign((xp - a).dot((b - a).cross(c - a)))
+    }
+
+    /// The side (±1) `edge` lay on from `other` a substep before the look
+    /// (by the two lines' orientation, [`closest`]'s normal), if the look
+    /// knows where and the lines were neither parallel nor met.
+    #[inline]
+    fn edge_side_before(&self, edge: [u32; 2], other: [u32; 2]) -> Option<f32> {
+        let from = self.from;
+        let at = |i: u32| from.get(i as usize).copied();
+        let (a, b, p, q) = (at(edge[0])?, at(edge[1])?, at(other[0])?, at(other[1])?);
+        sign((a - p).dot((b - a).cross(q - p)))
     }
 
     /// Pushes the pairs of the triangles `ts` (at most [`RUN`]) that `skip`
@@ -985,7 +1020,9 @@ impl Look<'_> {
         (gap.abs() < self.reach).then(|| EdgePair {
             edge,
             other,
-            side: if gap >= 0.0 { 1.0 } else { -1.0 },
+            side: self
+                .edge_side_before(edge, other)
+                .unwrap_or(if gap >= 0.0 { 1.0 } else { -1.0 }),
         })
     }
 
@@ -1191,7 +1228,12 @@ impl SelfContacts {
         {
             *look = None;
         } else if self.pairs_of != Some((last.number, basis.revision)) {
-            self.find_pairs(&last.at, basis.topology, basis.thickness, team);
+            self.find_pairs(
+                (&last.at, &last.from),
+                basis.topology,
+                basis.thickness,
+                team,
+            );
             self.pairs_of = Some((last.number, basis.revision));
         }
     }
@@ -1237,19 +1279,33 @@ impl SelfContacts {
     }
 
     /// Looks for pairs at positions `x` (the `basis`'s thickness and
-    /// margin) and records the look in `look`.
+    /// margin) and records the look in `look`; each pair takes its side
+    /// from where its particles were a substep of `h` seconds before, at
+    /// velocities `v` (m/s): a layer that crossed another within the
+    /// substep that asked for the look is pushed back, not kept on the far
+    /// side (a rubber `stack`'s corner swept through another cloth's
+    /// border in one substep, and the look took the far side for good).
     pub(crate) fn find(
         &mut self,
         look: &mut Option<SelfLook>,
-        x: &[Vector],
+        (x, v, h): (&[Vector], &[Vector], f32),
         basis: &LookBasis,
         team: Team,
     ) {
-        self.find_pairs(x, basis.topology, basis.thickness, team);
         let last = look.get_or_insert_with(SelfLook::default);
-        // The positions' buffer is reused: no allocation once warmed up.
+        // The positions' buffers are reused: no allocation once warmed up.
         last.at.clear();
         last.at.extend_from_slice(x);
+        last.from.clear();
+        if v.len() == x.len() {
+            last.from.extend(x.iter().zip(v).map(|(&x, &v)| x - v * h));
+        }
+        self.find_pairs(
+            (&last.at, &last.from),
+            basis.topology,
+            basis.thickness,
+            team,
+        );
         last.thickness = basis.thickness;
         last.margin = self.margin;
         last.number += 1;
@@ -1260,7 +1316,13 @@ impl SelfContacts {
     /// neighbours of, at positions `x`: blocks of triangles on the `team`,
     /// their pairs then joined in triangle order (the same list on any
     /// number of threads).
-    fn find_pairs(&mut self, x: &[Vector], topology: &Topology, thickness: f32, team: Team) {
+    fn find_pairs(
+        &mut self,
+        (x, from): (&[Vector], &[Vector]),
+        topology: &Topology,
+        thickness: f32,
+        team: Team,
+    ) {
         (self.pairs, self.used_blocks) = (0, 0);
         self.edge_pairs.clear();
         let triangles = &topology.triangles;
@@ -1270,6 +1332,7 @@ impl SelfContacts {
         let simd = simd_available() && !self.portable;
         let look = Look {
             x,
+            from: if from.len() == x.len() { from } else { &[] },
             topology,
             thickness,
             reach: thickness + self.margin,
@@ -1871,6 +1934,18 @@ pub(crate) fn is_positive(x: f32) -> bool {
     x > 0.0
 }
 
+/// +1 or −1 by the sign of `x`; none for zero or not a number.
+#[inline]
+fn sign(x: f32) -> Option<f32> {
+    if x > 0.0 {
+        Some(1.0)
+    } else if x < 0.0 {
+        Some(-1.0)
+    } else {
+        None
+    }
+}
+
 /// Barycentric coordinates `[u, v, w]` (weights of the corners a, b, c) of
 /// the point `a + q` in the plane of the triangle with edges `e1 = b − a`
 /// and `e2 = c − a`; a degenerate triangle gives a point outside (−1).
@@ -1958,7 +2033,7 @@ mod tests {
         let mut look = None;
         contacts.begin_step(&mut look, &basis(0.002), Team::ALONE);
         assert!(contacts.due(&look, &x), "no look yet");
-        contacts.find(&mut look, &x, &basis(0.002), Team::ALONE);
+        contacts.find(&mut look, (&x, &[], 0.0), &basis(0.002), Team::ALONE);
         assert!(!contacts.due(&look, &x));
         // The whole cloth falling: no two particles closed in.
         let fell: Vec<Vector> = x.iter().map(|&p| p - Vector::Y * 0.3).collect();
@@ -2032,7 +2107,7 @@ mod tests {
         };
         let (mut contacts, mut look) = (SelfContacts::default(), None);
         contacts.begin_step(&mut look, &basis, Team::ALONE);
-        contacts.find(&mut look, &folded, &basis, Team::ALONE);
+        contacts.find(&mut look, (&folded, &[], 0.0), &basis, Team::ALONE);
         assert!(
             !contacts.all_pairs().is_empty(),
             "the halves are within reach"
@@ -2081,7 +2156,7 @@ mod tests {
         };
         let mut look = None;
         contacts.begin_step(&mut look, &basis, Team::ALONE);
-        contacts.find(&mut look, x, &basis, Team::ALONE);
+        contacts.find(&mut look, (x, &[], 0.0), &basis, Team::ALONE);
         contacts
     }
 
@@ -2097,6 +2172,7 @@ mod tests {
             let contacts = looked_at(&cloth, &x, portable);
             let reference = Look {
                 x: &x,
+                from: &[],
                 topology,
                 thickness: LAYERS,
                 reach: LAYERS + contacts.margin,
@@ -2292,6 +2368,67 @@ mod tests {
         }
         let height = particles.x[22].y - particles.x[21].y;
         assert!(height > 0.5 * LAYERS, "{height} m above the triangle");
+    }
+
+    /// A particle that crossed a layer within the substep that asked for
+    /// the look keeps the side it came from: the look takes the sides from
+    /// where the particles were a substep before, and the pass pushes it
+    /// back out; taken from where it is, the side would keep it through.
+    #[test]
+    fn a_layer_crossed_within_the_substep_before_a_look_is_pushed_back() {
+        let (cloth, mut x) = joined_fine_sheets();
+        let topology = &*cloth.topology;
+        // The upper sheet's middle particle 1 mm under the lower sheet,
+        // having come down at 6 m/s over a substep of 1.5 ms (from 8 mm
+        // over it).
+        let (q, h) = (25 + 12, 1.5e-3);
+        x[q].y = -0.001;
+        let mut v = vec![Vector::ZERO; x.len()];
+        v[q] = Vector::new(0.0, -6.0, 0.0);
+        let basis = LookBasis {
+            topology,
+            particles: x.len(),
+            revision: cloth.mass_revision,
+            thickness: LAYERS,
+            margin: LAYERS,
+        };
+        let params = SelfContactParams {
+            thickness: LAYERS,
+            friction: 0.0,
+            h,
+        };
+        let pushed = |v: &[Vector]| {
+            let mut contacts = SelfContacts::default();
+            let mut look = None;
+            contacts.begin_step(&mut look, &basis, Team::ALONE);
+            contacts.find(&mut look, (&x, v, h), &basis, Team::ALONE);
+            let sides: Vec<f32> = contacts
+                .all_pairs()
+                .iter()
+                .filter(|p| p.particle == q as u32)
+                .map(|p| p.side)
+                .collect();
+            let mut particles = cloth.particles.clone();
+            particles.x.copy_from_slice(&x);
+            for _ in 0..4 {
+                contacts.resolve(&mut particles, topology, &params, Team::ALONE);
+            }
+            // Over the lower sheet's particle under it.
+            (sides, particles.x[q].y - particles.x[12].y)
+        };
+        let (sides, y) = pushed(&v);
+        assert!(
+            !sides.is_empty() && sides.iter().all(|&s| s == 1.0),
+            "{sides:?}"
+        );
+        assert!(y > 0.5 * LAYERS, "{y} m");
+        // At rest (no velocity) the look takes the side it is on now.
+        let (sides, y) = pushed(&vec![Vector::ZERO; x.len()]);
+        assert!(
+            !sides.is_empty() && sides.iter().all(|&s| s == -1.0),
+            "{sides:?}"
+        );
+        assert!(y < 0.0, "{y} m");
     }
 
     /// The pass eight pairs at a time (a vector test passing over the

@@ -386,7 +386,8 @@ impl ClothSolver {
                 if selfc.due(look, &cloth.particles.x) {
                     let looked = std::time::Instant::now();
                     let basis = look_basis(cloth, thickness);
-                    selfc.find(look, &cloth.particles.x, &basis, team);
+                    let p = &cloth.particles;
+                    selfc.find(look, (&p.x, &p.v, h), &basis, team);
                     report.self_looks += 1;
                     times.self_looks += looked.elapsed().as_secs_f64();
                 }
