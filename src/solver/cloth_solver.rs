@@ -139,7 +139,7 @@ pub(super) fn substeps_with(settings: &SolverSettings, cloth: &Cloth, dt: f32) -
                 // Cloths joined into one (their grids stacked, the chains
                 // apply) land on each other: at least
                 // `JOINED_SELF_SUBSTEPS_PER_SECOND` (the `stack` at 60 Hz:
-                // 24, against the sweeps' 28).
+                // 20, against the sweeps' 28).
                 let sweeps = stable_substeps(cloth, &unshortened(settings), dt);
                 let joined = cloth.grid().is_none();
                 let stable = if chains_lengthen(cloth, settings) {

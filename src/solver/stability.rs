@@ -384,17 +384,19 @@ const SELF_CLOSING_SPEED: f32 = 6.4;
 /// self-collision where the chain solves lengthen the substeps: they land
 /// on each other, faster than one cloth's layers close. Measured on the
 /// `stack` over 42 starts (N = 26–38 in steps of 2, cotton, silk and
-/// denim, 60 and 50 Hz; crossed in some frame / still at the end), with
-/// a triangle's one-ring paired on a grid
-/// ([`crate::collision::MeshNeighbours`]), every material at the same
+/// denim, 60 and 50 Hz; crossed in some frame / still at the end). With a
+/// triangle's one-ring paired on a grid
+/// ([`crate::collision::MeshNeighbours`]) and every material at one
 /// count: at 1440 (24 substeps at 60 Hz, 29 at 50) 1 / 0, as at the
 /// sweeps' own (cotton 28 and 33, denim 46 and 55, silk 17 and 21) 2 / 0;
-/// at 1320 (22 and 27) 6 / 2; at 1200 (20 and 24) 5 / 1. With this rule
-/// (silk at its sweeps' 17 and 21) 3 / 0. The crossings at the lower
-/// rates were at the borders: two cloths' border edges in an X by a
-/// corner, creases of two cloths in an X near a border. Before the
-/// one-ring was paired, 20 substeps left a border's pleat crossed too.
-const JOINED_SELF_SUBSTEPS_PER_SECOND: f32 = 1440.0;
+/// at 1320 (22 and 27) 6 / 2; at 1200 (20 and 24) 5 / 1, the crossings at
+/// the borders (two cloths' border edges in an X by a corner, creases of
+/// two cloths in an X near a border). With the pairs' sides taken a
+/// substep before the look too: at 1200, all at one count, 4 / 0; as this
+/// rule gives them (silk at its sweeps' 17 and 21) 5 / 0, six
+/// self-intersections in all, each in a frame or two (the sweeps' counts
+/// before either change: 1 / 0, two).
+const JOINED_SELF_SUBSTEPS_PER_SECOND: f32 = 1200.0;
 
 /// The substeps of a frame of `dt` seconds for cloths joined into one
 /// with self-collision where the chains apply
