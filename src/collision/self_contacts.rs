@@ -2140,6 +2140,16 @@ mod tests {
     /// The layers' thickness and the margin of [`looked_at`] (m).
     const LAYERS: f32 = 0.005;
 
+    /// The pass's parameters for layers [`LAYERS`] thick, with `friction`
+    /// and a substep of `h` seconds.
+    fn layer_params(friction: f32, h: f32) -> SelfContactParams {
+        SelfContactParams {
+            thickness: LAYERS,
+            friction,
+            h,
+        }
+    }
+
     /// Self-collision of `cloth` after a look at `x` (with the AVX2
     /// kernels unless `portable`).
     fn looked_at(cloth: &crate::cloth::Cloth, x: &[Vector], portable: bool) -> SelfContacts {
@@ -2264,11 +2274,7 @@ mod tests {
             "{:?}",
             contacts.edge_pairs
         );
-        let params = SelfContactParams {
-            thickness: LAYERS,
-            friction: 0.0,
-            h: 1.0e-3,
-        };
+        let params = layer_params(0.0, 1.0e-3);
         // The upper sheet sinks 4 mm, through the lower one's crease, each
         // particle still over 5 mm from the other sheet's triangles.
         let topology = &*cloth.topology;
@@ -2321,11 +2327,7 @@ mod tests {
     fn a_border_folded_over_at_a_corner_keeps_to_its_side() {
         let (cloth, flat) = joined_fine_sheets();
         let topology = &*cloth.topology;
-        let params = SelfContactParams {
-            thickness: LAYERS,
-            friction: 0.0,
-            h: 1.0e-3,
-        };
+        let params = layer_params(0.0, 1.0e-3);
         // Flat: pairs of a corner's one-ring exist, and the pass moves
         // nothing.
         let contacts = looked_at(&cloth, &flat, false);
@@ -2392,11 +2394,7 @@ mod tests {
             thickness: LAYERS,
             margin: LAYERS,
         };
-        let params = SelfContactParams {
-            thickness: LAYERS,
-            friction: 0.0,
-            h,
-        };
+        let params = layer_params(0.0, h);
         let pushed = |v: &[Vector]| {
             let mut contacts = SelfContacts::default();
             let mut look = None;
@@ -2439,11 +2437,7 @@ mod tests {
     fn the_pass_by_eights_gives_the_bits_of_one_pair_at_a_time() {
         let (cloth, x) = crumpled_layers();
         let topology = &*cloth.topology;
-        let params = SelfContactParams {
-            thickness: LAYERS,
-            friction: 0.3,
-            h: 1.0e-3,
-        };
+        let params = layer_params(0.3, 1.0e-3);
         let run = |portable: bool| {
             let contacts = looked_at(&cloth, &x, portable);
             let parts: Vec<Vec<&PartPairs>> =
