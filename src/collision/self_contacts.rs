@@ -2122,17 +2122,28 @@ mod tests {
     /// layers: pairs within reach everywhere, some closer than the
     /// thickness.
     fn crumpled_layers() -> (crate::cloth::Cloth, Vec<Vector>) {
-        let sheet = ClothBuilder::new(14, 14).size(0.35, 0.35).build().unwrap();
-        let cloth = crate::cloth::Cloth::join(vec![sheet; 3]).unwrap();
-        let x = cloth
-            .positions()
-            .iter()
-            .enumerate()
-            .map(|(i, &p)| {
-                let layer = (i / (14 * 14)) as f32;
-                let bump = 0.004 * ((p.x * 23.0).sin() + (p.z * 17.0 + layer).cos());
-                Vector::new(p.x + 0.003 * layer, 0.004 * layer + bump, p.z)
-            })
+        joined_sheets((14, 0.35), 3, |i, p| {
+            let layer = (i / (14 * 14)) as f32;
+            let bump = 0.004 * ((p.x * 23.0).sin() + (p.z * 17.0 + layer).cos());
+            Vector::new(p.x + 0.003 * layer, 0.004 * layer + bump, p.z)
+        })
+    }
+
+    /// `copies` square sheets of `side` particles a side and `size`
+    /// metres joined into one cloth, particle `i` of rest position `p`
+    /// placed at `place(i, p)`.
+    fn joined_sheets(
+        (side, size): (usize, f32),
+        copies: usize,
+        place: impl Fn(usize, Vector) -> Vector,
+    ) -> (crate::cloth::Cloth, Vec<Vector>) {
+        let sheet = ClothBuilder::new(side, side)
+            .size(size, size)
+            .build()
+            .unwrap();
+        let cloth = crate::cloth::Cloth::join(vec![sheet; copies]).unwrap();
+        let x = (cloth.positions().iter().enumerate())
+            .map(|(i, &p)| place(i, p))
             .collect();
         (cloth, x)
     }
@@ -2308,15 +2319,9 @@ mod tests {
     /// the first (within reach, beyond the thickness: the first is looked
     /// at, and no pair between them acts).
     fn joined_fine_sheets() -> (crate::cloth::Cloth, Vec<Vector>) {
-        let sheet = ClothBuilder::new(5, 5).size(0.04, 0.04).build().unwrap();
-        let cloth = crate::cloth::Cloth::join(vec![sheet; 2]).unwrap();
-        let x = cloth
-            .positions()
-            .iter()
-            .enumerate()
-            .map(|(i, &p)| Vector::new(p.x, if i < 25 { 0.0 } else { 0.008 }, p.z))
-            .collect();
-        (cloth, x)
+        joined_sheets((5, 0.04), 2, |i, p| {
+            Vector::new(p.x, if i < 25 { 0.0 } else { 0.008 }, p.z)
+        })
     }
 
     /// A border folded over at a particle is paired with the triangles of
