@@ -124,22 +124,32 @@ impl ClothSolver {
         // N = 128 on two).
         let busy = edges_near || self.workspace.touched_last_step;
         let threads = self.settings.parallel && shares_well(cloth, integrator, busy);
+        let cloth_shares = stages_share_well(cloth, integrator, busy);
         let report = with_team(threads, |team| {
-            self.step_with_team(cloth, obstacles, (dt, k, edges_near), team, started)
+            // The cloth's own stages share the team only where they gain
+            // from it; self-collision's from any size the team is made for.
+            let cloth_team = if cloth_shares { team } else { Team::ALONE };
+            let teams = StepTeams {
+                all: team,
+                cloth: cloth_team,
+            };
+            self.step_with_team(cloth, obstacles, (dt, k, edges_near), teams, started)
         })?;
         self.workspace.touched_last_step = report.contacts > 0;
         Ok(report)
     }
 
-    /// [`Self::step`] from its backups on, its loops shared by the `team`.
+    /// [`Self::step`] from its backups on, its loops shared by the
+    /// `teams`.
     fn step_with_team(
         &mut self,
         cloth: &mut Cloth,
         obstacles: &[Obstacle],
         (dt, k, edges_near): (f32, u32, bool),
-        team: Team,
+        teams: StepTeams,
         started: std::time::Instant,
     ) -> Result<StepReport, ClothError> {
+        let team = teams.all;
         let integrator = self.settings.integrator;
         let n = cloth.particle_count();
         let ws = &mut self.workspace;
@@ -192,7 +202,7 @@ impl ClothSolver {
             cloth,
             obstacles,
             (dt, k, longest_rest, layer, edges_near),
-            team,
+            teams,
         )?;
         // Divergence check.
         if !is_sane(cloth, team) {
@@ -270,7 +280,7 @@ impl ClothSolver {
     }
 
     /// The substeps of a step of `dt` seconds in `k` substeps, on the
-    /// `team`'s threads; on an integrator's error the cloth is put back.
+    /// `teams`' threads; on an integrator's error the cloth is put back.
     /// `longest_rest` is the longest stretch or shear spring's rest length
     /// (m; 0 without edge collisions).
     fn substeps(
@@ -278,8 +288,11 @@ impl ClothSolver {
         cloth: &mut Cloth,
         obstacles: &[Obstacle],
         (dt, k, longest_rest, layer, edges_near): (f32, u32, f32, f32, bool),
-        team: Team,
+        teams: StepTeams,
     ) -> Result<StepReport, ClothError> {
+        // Self-collision's looks and passes on the whole team, the rest on
+        // the cloth's.
+        let (self_team, team) = (teams.all, teams.cloth);
         let h = dt / k as f32;
         // The limit after a substep of an integrator that does not hold it
         // itself: relaxed passes (`limit_stretch_relaxed`) while the
@@ -387,7 +400,7 @@ impl ClothSolver {
                     let looked = std::time::Instant::now();
                     let basis = look_basis(cloth, thickness);
                     let p = &cloth.particles;
-                    selfc.find(look, (&p.x, &p.v, h), &basis, team);
+                    selfc.find(look, (&p.x, &p.v, h), &basis, self_team);
                     report.self_looks += 1;
                     times.self_looks += looked.elapsed().as_secs_f64();
                 }
@@ -404,7 +417,7 @@ impl ClothSolver {
                         friction: cloth.params.self_friction,
                         h,
                     },
-                    team,
+                    self_team,
                 );
                 report.self_contacts += self_touching;
                 watch.lap(&mut times.self_collision);
@@ -588,8 +601,27 @@ const TEAM_MIN_PARTICLES: usize = 2048;
 /// [`XPBD_BUSY_TEAM_MIN_PARTICLES`] in a `busy` step (one near an
 /// obstacle's edges, or after a step that touched an obstacle).
 fn shares_well(cloth: &Cloth, integrator: Integrator, busy: bool) -> bool {
+    if cloth.params.self_collision {
+        return cloth.particle_count() >= TEAM_MIN_PARTICLES;
+    }
+    stages_share_well(cloth, integrator, busy)
+}
+
+/// True when the stages of a step of `cloth` other than self-collision's
+/// (the integrator's, the stretch limit's, the obstacles') gain from a team
+/// of threads: [`shares_well`]'s rule for the cloth without
+/// self-collision. A cloth with self-collision takes the team for its looks
+/// and passes from [`TEAM_MIN_PARTICLES`] (they gain at any size), and for
+/// the rest only by this rule. The `stack` (three 32 × 32 cloths, 3072
+/// particles) ran the small-steps solver's substeps slower on two threads
+/// than on one (1.2–2.7 against 1.1 ms a frame); with them on one thread
+/// inside a step on two, `run stack` 7.13 → 6.69 and 8.05 → 7.27 ms a
+/// frame (medians of eight and six alternated runs; the same bits). The
+/// `fold` (2304 particles) 2.07 → 2.26 in `run fold`, 2.43 → 2.28 in a
+/// scratch step loop: within its budget either way.
+fn stages_share_well(cloth: &Cloth, integrator: Integrator, busy: bool) -> bool {
     let n = cloth.particle_count();
-    if integrator == Integrator::Xpbd && !cloth.params.self_collision {
+    if integrator == Integrator::Xpbd {
         let least = if busy {
             XPBD_BUSY_TEAM_MIN_PARTICLES
         } else {
@@ -598,6 +630,16 @@ fn shares_well(cloth: &Cloth, integrator: Integrator, busy: bool) -> bool {
         return lane_grid(cloth).is_some() && n >= least;
     }
     n >= TEAM_MIN_PARTICLES
+}
+
+/// The teams of a step: the whole team (self-collision's looks and
+/// passes, the backups and the divergence check) and the one the cloth's
+/// other stages share ([`stages_share_well`]; the whole team or
+/// [`Team::ALONE`]).
+#[derive(Clone, Copy)]
+struct StepTeams<'a> {
+    all: Team<'a>,
+    cloth: Team<'a>,
 }
 
 /// Particles from which the small-steps solver shares the step of a grid
