@@ -229,23 +229,24 @@ impl PairLanes {
         self.simd && !self.broken && self.len == pairs && self.particles == particles && pairs > 0
     }
 
-    /// The first of the eight pairs from `k` that the pass may act on at
-    /// positions `x`, for layers `(thickness, margin)` (m): not idle by
-    /// [`SelfContacts::pair_pass`]'s tests up to the barycentrics, each
-    /// made a hair looser; [`LANES`] when all are idle.
-    fn first_busy(&self, k: usize, x: &Points, layers: (f32, f32)) -> usize {
+    /// Which of the eight pairs from `k` the pass may act on at positions
+    /// `x`, for layers `(thickness, margin)` (m), a bit each (lane `l` bit
+    /// `l`): those not idle by [`SelfContacts::pair_pass`]'s tests up to
+    /// the barycentrics, each made a hair looser; every pair's bit when
+    /// the lanes are not usable. None past the last pair.
+    fn busy(&self, k: usize, x: &Points, layers: (f32, f32)) -> u32 {
         #[cfg(target_arch = "x86_64")]
         if self.usable(self.len, x.len) && k < self.len {
             // SAFETY: usable only with AVX2, with every index below
             // `x.len`, and `k` a pair's; the pairs' particles are this
             // part's.
-            return unsafe { self.first_busy_avx2(k, x, layers) };
+            return unsafe { self.busy_avx2(k, x, layers) };
         }
-        let _ = (k, x, layers);
-        0
+        let _ = (x, layers);
+        (1u32 << self.len.saturating_sub(k).min(LANES)) - 1
     }
 
-    /// [`Self::first_busy`] in AVX2.
+    /// [`Self::busy`] in AVX2.
     ///
     /// # Safety
     /// The CPU has AVX2; the lanes' indices are below `x.len`; `k` is
@@ -253,12 +254,7 @@ impl PairLanes {
     /// pairs meanwhile.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn first_busy_avx2(
-        &self,
-        k: usize,
-        x: &Points,
-        (thickness, margin): (f32, f32),
-    ) -> usize {
+    unsafe fn busy_avx2(&self, k: usize, x: &Points, (thickness, margin): (f32, f32)) -> u32 {
         use std::arch::x86_64::*;
         assert!(k + LANES <= self.p.len() && self.p.len() == self.side.len());
         assert!(self.corners.iter().all(|c| c.len() == self.p.len()));
@@ -343,12 +339,7 @@ impl PairLanes {
             let lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
             let left = _mm256_set1_epi32((self.len - k).min(LANES) as i32);
             let real = _mm256_castsi256_ps(_mm256_cmpgt_epi32(left, lane));
-            let bits = _mm256_movemask_ps(_mm256_andnot_ps(idle, real)) as u32;
-            if bits == 0 {
-                LANES
-            } else {
-                bits.trailing_zeros() as usize
-            }
+            _mm256_movemask_ps(_mm256_andnot_ps(idle, real)) as u32
         }
     }
 }
@@ -1630,19 +1621,30 @@ impl SelfContacts {
         let n = pairs.len();
         let layers = (params.thickness, self.margin);
         if lanes.usable(n, x.len) {
-            // Eight pairs at a time: a vector test finds the first the
-            // pass may act on; those before it would change nothing and
-            // are passed over, and from it to the eighth each takes the
-            // pass one at a time (from positions the pairs before moved):
-            // the bits of the pass one pair at a time.
+            // Eight pairs at a time: a vector test finds those the pass
+            // may act on, and each of them takes the pass in turn; the
+            // others would change nothing and are passed over. A pair
+            // that moved particles may have moved those of the pairs
+            // after it: they are tested again from the new positions.
+            // The bits of the pass one pair at a time.
             for k in (0..n).step_by(LANES) {
-                let first = lanes.first_busy(k, x, layers);
-                if first < LANES {
-                    near = None;
-                    for pair in &pairs[k + first..(k + LANES).min(n)] {
-                        touching +=
-                            self.pair_pass(pair, &mut near, (x, v, inv_mass), (topology, params));
-                    }
+                let mut bits = lanes.busy(k, x, layers);
+                while bits != 0 {
+                    let j = bits.trailing_zeros() as usize;
+                    let moved = self.pair_pass(
+                        &pairs[k + j],
+                        &mut near,
+                        (x, v, inv_mass),
+                        (topology, params),
+                    );
+                    touching += moved;
+                    // The lanes after `j`.
+                    let after = !((2u32 << j) - 1);
+                    bits = if moved > 0 {
+                        lanes.busy(k, x, layers) & after
+                    } else {
+                        bits & after
+                    };
                 }
             }
         } else {
