@@ -655,9 +655,7 @@ impl Look<'_> {
         Some(SelfPair {
             particle: p,
             triangle: f.t,
-            side: self
-                .side_before(f.tri, p)
-                .unwrap_or(if d >= 0.0 { 1.0 } else { -1.0 }),
+            side: self.side_before(f.tri, p).unwrap_or(side_at(d)),
         })
     }
 
@@ -1011,9 +1009,7 @@ impl Look<'_> {
         (gap.abs() < self.reach).then(|| EdgePair {
             edge,
             other,
-            side: self
-                .edge_side_before(edge, other)
-                .unwrap_or(if gap >= 0.0 { 1.0 } else { -1.0 }),
+            side: self.edge_side_before(edge, other).unwrap_or(side_at(gap)),
         })
     }
 
@@ -1934,6 +1930,18 @@ fn headroom<T>(list: &mut Vec<T>) {
 #[inline]
 pub(crate) fn is_positive(x: f32) -> bool {
     x > 0.0
+}
+
+/// The side (±1) of a pair found at signed distance `d` (m), when the
+/// look does not know where it lay a substep before (or it lay in the
+/// plane): the distance's, +1 at zero.
+#[inline]
+fn side_at(d: f32) -> f32 {
+    if d >= 0.0 {
+        1.0
+    } else {
+        -1.0
+    }
 }
 
 /// +1 or −1 by the sign of `x`; none for zero or not a number.
