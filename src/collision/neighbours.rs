@@ -11,6 +11,7 @@
 //! triangles.
 
 use crate::cloth::{SpringKind, Topology};
+use crate::math::Vector;
 
 /// Flat adjacency lists of a topology (compressed rows, sorted).
 #[derive(Debug, Default, Clone)]
@@ -250,6 +251,26 @@ impl MeshNeighbours {
             // Off a grid `rest` is empty and nothing is held.
             radius2: radius * radius,
         }
+    }
+
+    /// The longest triangle edge at positions `x` (m; 0 with none, not a
+    /// number when a position is not, and infinite when `x` holds fewer
+    /// particles than the edges' ends).
+    pub fn longest_at(&self, x: &[Vector]) -> f32 {
+        let mut longest = 0.0f32;
+        for p in 0..self.edge_start.len().saturating_sub(1) {
+            for &q in self.edges_from(p as u32) {
+                let (Some(&a), Some(&b)) = (x.get(p), x.get(q as usize)) else {
+                    return f32::INFINITY;
+                };
+                let length = (b - a).length_squared();
+                if length.is_nan() {
+                    return f32::NAN;
+                }
+                longest = longest.max(length);
+            }
+        }
+        longest.sqrt()
     }
 
     /// The particles joined to `p` by a spring, ascending.

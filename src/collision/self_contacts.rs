@@ -59,7 +59,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::motion_tiles::MotionTiles;
+use super::motion_tiles::{MotionTiles, ParticleTest};
 use super::neighbours::{MeshNeighbours, Sheet, TopologyKey};
 use super::patches::Patches;
 use super::spatial_hash::SpatialHash;
@@ -137,6 +137,12 @@ pub struct SelfContacts {
     /// at the last look; per particle: at one (scratch).
     sharp: Vec<bool>,
     on_fold: Vec<bool>,
+    /// Per particle: an end of a border edge or of the last look's sharp
+    /// folds' edges (the edges a look may pair), for the test of the
+    /// motions ([`ParticleTest`]).
+    edge_ends: Vec<bool>,
+    /// The longest triangle edge at the last look (m), for the same test.
+    longest_edge: f32,
     /// Per triangle: where its pairs start and end in its block's list,
     /// at the last look.
     triangle_pairs: Vec<[u32; 2]>,
@@ -1262,7 +1268,11 @@ impl SelfContacts {
         // from a triangle (on a pair's far side, the thickness and the
         // margin; over the rim, at most the thickness).
         let near = 2.0 * look.thickness + self.margin;
-        self.tiles.closed_in(x, &look.at, near, self.margin)
+        let by = ParticleTest {
+            edge_ends: &self.edge_ends,
+            longest: self.longest_edge,
+        };
+        self.tiles.closed_in(x, &look.at, (near, self.margin), by)
     }
 
     /// Looks for pairs at positions `x` (the `basis`'s thickness and
@@ -1312,6 +1322,11 @@ impl SelfContacts {
     ) {
         (self.pairs, self.used_blocks) = (0, 0);
         self.edge_pairs.clear();
+        // For the test of the motions: the look's longest edge, and the
+        // ends of the edges it may pair (none yet: every particle counts
+        // as one).
+        self.longest_edge = self.neighbours.longest_at(x);
+        self.edge_ends.clear();
         let triangles = &topology.triangles;
         if triangles.is_empty() {
             return;
@@ -1412,6 +1427,16 @@ impl SelfContacts {
         }
         let first_fold = self.edge_pairs.len();
         self.find_folds(x.len());
+        // The ends of the edges this look may pair: the border's and the
+        // sharp folds'.
+        self.edge_ends.clone_from(&self.on_fold);
+        for &border in self.neighbours.border_edges() {
+            for p in border {
+                if let Some(end) = self.edge_ends.get_mut(p as usize) {
+                    *end = true;
+                }
+            }
+        }
         self.pair_folds(&look, team);
         let fold_blocks = self.folds.len().div_ceil(FOLD_BLOCK);
         for list in &mut self.fold_blocks[..fold_blocks] {
@@ -2058,17 +2083,17 @@ mod tests {
         assert!(!contacts.due(&look, &moved(0.0099)), "9.9 mm");
         assert!(contacts.due(&look, &moved(0.0101)), "10.1 mm");
         assert!(contacts.due(&look, &moved(f32::NAN)), "lost: look again");
-        // Two particles moved 4 mm apart along x and y each (5.7 mm each,
-        // 11.3 mm from each other): due, though each moved less than the
-        // margin.
-        let apart = |d: f32| {
+        // Two neighbours moved 4 mm apart along x and y each (5.7 mm
+        // each, 11.3 mm from each other): due, though each moved less
+        // than the margin.
+        let apart = |(i, j): (usize, usize), d: f32| {
             let mut y = x.clone();
-            y[3] += Vector::new(d, d, 0.0);
-            y[9] -= Vector::new(d, d, 0.0);
+            y[i] += Vector::new(d, d, 0.0);
+            y[j] -= Vector::new(d, d, 0.0);
             y
         };
-        assert!(contacts.due(&look, &apart(0.004)));
-        assert!(!contacts.due(&look, &apart(0.0034)), "9.6 mm apart");
+        assert!(contacts.due(&look, &apart((5, 6), 0.004)));
+        assert!(!contacts.due(&look, &apart((5, 6), 0.0034)), "9.6 mm apart");
         // Four particles moved out along ±x and ±z: the box around the
         // motions is 2√2 times one motion wide, but no two particles closed
         // in by more than twice one motion, which the mean tells.
@@ -2088,6 +2113,40 @@ mod tests {
         assert!(!contacts.due(&look, &x));
         contacts.begin_step(&mut look, &basis(0.003), Team::ALONE);
         assert!(look.is_none() && contacts.due(&look, &x));
+    }
+
+    /// Two particles inside a cloth, further apart than a triangle reaches
+    /// from either, moved apart by more than the margin: no triangle of one
+    /// closed in on the other, and no look is due; two neighbours moved
+    /// alike, or the far two moved far enough for the edges between them
+    /// to have stretched as far, and one is.
+    #[test]
+    fn far_particles_moved_apart_need_no_look() {
+        let cloth = ClothBuilder::new(8, 8).build().unwrap();
+        let topology = &*cloth.topology;
+        let x = cloth.positions().to_vec();
+        let basis = LookBasis {
+            topology,
+            particles: x.len(),
+            revision: cloth.mass_revision,
+            thickness: 0.002,
+            margin: 0.01,
+        };
+        let mut contacts = SelfContacts::default();
+        let mut look = None;
+        contacts.begin_step(&mut look, &basis, Team::ALONE);
+        contacts.find(&mut look, (&x, &[], 0.0), &basis, Team::ALONE);
+        // 4 mm along x and y each: 11.3 mm from each other. Particles 9
+        // and 54 lie five cells apart along the diagonal, off the border.
+        let apart = |(i, j): (usize, usize), d: f32| {
+            let mut y = x.clone();
+            y[i] += Vector::new(d, d, 0.0);
+            y[j] -= Vector::new(d, d, 0.0);
+            y
+        };
+        assert!(!contacts.due(&look, &apart((9, 54), 0.004)), "far apart");
+        assert!(contacts.due(&look, &apart((9, 10), 0.004)), "neighbours");
+        assert!(contacts.due(&look, &apart((9, 54), 0.2)), "20 cm each");
     }
 
     /// Fresh scratch finds the pairs of the last look again, at the
