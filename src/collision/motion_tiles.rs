@@ -551,7 +551,7 @@ impl ReachLanes {
     ) -> bool {
         use std::arch::x86_64::*;
         let n = self.end.len();
-        assert!(n % STEP == 0 && self.x.iter().chain(&self.moved).all(|v| v.len() == n));
+        assert!(n.is_multiple_of(STEP) && self.x.iter().chain(&self.moved).all(|v| v.len() == n));
         let splat = |v: f32| _mm256_set1_ps(v);
         let (close2, far2, margin2) = (
             splat(close * close),
