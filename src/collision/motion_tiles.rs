@@ -500,13 +500,16 @@ fn particles_apart(
     (close, far, margin): (f32, f32, f32),
     edge_ends: &[bool],
 ) -> bool {
-    let edge_end = |p: u32| edge_ends.get(p as usize).copied().unwrap_or(true);
     for &p in a {
         let (xp, moved) = (x[p as usize], x[p as usize] - at[p as usize]);
-        let end = edge_end(p);
+        let end = is_edge_end(edge_ends, p);
         for &c in b {
             let xc = x[c as usize];
-            let within = if end || edge_end(c) { far } else { close };
+            let within = if end || is_edge_end(edge_ends, c) {
+                far
+            } else {
+                close
+            };
             if (xp - xc).length_squared() <= within * within
                 && (moved - (xc - at[c as usize])).length_squared() > margin * margin
             {
@@ -515,6 +518,12 @@ fn particles_apart(
         }
     }
     false
+}
+
+/// Whether particle `p` ends an edge a look may pair, by `edge_ends`; a
+/// particle past its end counts as one (the wider reach is the safe one).
+fn is_edge_end(edge_ends: &[bool], p: u32) -> bool {
+    edge_ends.get(p as usize).copied().unwrap_or(true)
 }
 
 impl ReachLanes {
@@ -531,7 +540,7 @@ impl ReachLanes {
                 self.x[k].push(xc[k]);
                 self.moved[k].push(moved[k]);
             }
-            let end = edge_ends.get(c as usize).copied().unwrap_or(true);
+            let end = is_edge_end(edge_ends, c);
             self.end
                 .push(if end { f32::from_bits(u32::MAX) } else { 0.0 });
         }
@@ -569,7 +578,7 @@ impl ReachLanes {
         };
         for &p in a {
             let (xp, moved) = (x[p as usize], x[p as usize] - at[p as usize]);
-            let end = edge_ends.get(p as usize).copied().unwrap_or(true);
+            let end = is_edge_end(edge_ends, p);
             let (xp, moved) = (xp.to_array().map(splat), moved.to_array().map(splat));
             for k in (0..n).step_by(STEP) {
                 // SAFETY: `k + STEP <= n`, every array's length (asserted).
@@ -804,6 +813,9 @@ mod tests {
         let (cloth, rest) = two_sheets(0.0, mesh);
         let mut tiles = tiles_for(&cloth);
         let (neighbours, edge_ends) = edges_of(&cloth);
+        let edges: Vec<[u32; 2]> = (0..rest.len() as u32)
+            .flat_map(|p| neighbours.edges_from(p).iter().map(move |&q| [p, q]))
+            .collect();
         let (near, margin) = (0.015, 0.01);
         let mut spared = 0;
         let mut seed = 7u32;
@@ -866,9 +878,6 @@ mod tests {
             quiet[beside] += 1;
             spared += usize::from(by_boxes);
             // A border edge and any edge (a look pairs them).
-            let edges: Vec<[u32; 2]> = (0..x.len() as u32)
-                .flat_map(|p| neighbours.edges_from(p).iter().map(move |&q| [p, q]))
-                .collect();
             for &[a, b] in neighbours.border_edges() {
                 for &[p, q] in &edges {
                     let ends = |[i, j]: [u32; 2]| (x[i as usize], x[j as usize]);

@@ -2086,12 +2086,7 @@ mod tests {
         // Two neighbours moved 4 mm apart along x and y each (5.7 mm
         // each, 11.3 mm from each other): due, though each moved less
         // than the margin.
-        let apart = |(i, j): (usize, usize), d: f32| {
-            let mut y = x.clone();
-            y[i] += Vector::new(d, d, 0.0);
-            y[j] -= Vector::new(d, d, 0.0);
-            y
-        };
+        let apart = |pair, d| moved_apart(&x, pair, d);
         assert!(contacts.due(&look, &apart((5, 6), 0.004)));
         assert!(!contacts.due(&look, &apart((5, 6), 0.0034)), "9.6 mm apart");
         // Four particles moved out along ±x and ±z: the box around the
@@ -2113,6 +2108,15 @@ mod tests {
         assert!(!contacts.due(&look, &x));
         contacts.begin_step(&mut look, &basis(0.003), Team::ALONE);
         assert!(look.is_none() && contacts.due(&look, &x));
+    }
+
+    /// Positions `x` with particle `i` moved by `d` metres along x and y
+    /// and particle `j` by as much the other way.
+    fn moved_apart(x: &[Vector], (i, j): (usize, usize), d: f32) -> Vec<Vector> {
+        let mut y = x.to_vec();
+        y[i] += Vector::new(d, d, 0.0);
+        y[j] -= Vector::new(d, d, 0.0);
+        y
     }
 
     /// Two particles inside a cloth, further apart than a triangle reaches
@@ -2138,12 +2142,7 @@ mod tests {
         contacts.find(&mut look, (&x, &[], 0.0), &basis, Team::ALONE);
         // 4 mm along x and y each: 11.3 mm from each other. Particles 9
         // and 54 lie five cells apart along the diagonal, off the border.
-        let apart = |(i, j): (usize, usize), d: f32| {
-            let mut y = x.clone();
-            y[i] += Vector::new(d, d, 0.0);
-            y[j] -= Vector::new(d, d, 0.0);
-            y
-        };
+        let apart = |pair, d| moved_apart(&x, pair, d);
         assert!(!contacts.due(&look, &apart((9, 54), 0.004)), "far apart");
         assert!(contacts.due(&look, &apart((9, 10), 0.004)), "neighbours");
         assert!(contacts.due(&look, &apart((9, 54), 0.2)), "20 cm each");
