@@ -1,0 +1,604 @@
+//! A look for pairs: the triangles in runs, against the hash of the particles.
+
+use super::edge_pairs::FOLD_BLOCK;
+use super::geometry::{barycentric, edge_lengths, is_positive, rim, rim_slack, side_at, sign};
+use super::pair_lanes::PairLanes;
+use super::{EdgePair, SelfContacts, SelfPair};
+use crate::cloth::Topology;
+use crate::collision::neighbours::{MeshNeighbours, Sheet};
+use crate::collision::spatial_hash::SpatialHash;
+use crate::math::{simd_available, Vector};
+use crate::parallel::{Disjoint, Team};
+
+/// Triangles a thread takes at a time in a look for pairs (a quarter of
+/// 1024: the `fold`'s look, on two threads, 3.40 → 3.35 ms a frame).
+pub(super) const TRIANGLE_BLOCK: usize = 256;
+
+/// Border edges a thread takes at a time in a look for pairs.
+pub(super) const BORDER_BLOCK: usize = 64;
+
+/// The edge pairs a block of border edges or sharp folds found, alone on
+/// its cache lines, and its scratch of candidate edges.
+#[derive(Debug, Default, Clone)]
+#[repr(align(128))]
+pub(super) struct EdgeList(pub(super) Vec<EdgePair>, pub(super) Vec<[u32; 2]>);
+
+/// The pairs a block of triangles found, alone on its cache lines (blocks
+/// on different threads push at once), in triangle order; the candidates
+/// of its runs of triangles ([`Look::run`]); and its pairs in the pass's
+/// three parts ([`PassPlane`](super::pass_plane::PassPlane)), with their lanes.
+#[derive(Debug, Default, Clone)]
+#[repr(align(128))]
+pub(super) struct PairList(
+    pub(super) Vec<SelfPair>,
+    pub(super) Candidates,
+    pub(super) [PartPairs; 3],
+);
+
+/// The pairs of one block in one part of the pass, and their lanes.
+#[derive(Debug, Default, Clone)]
+pub(super) struct PartPairs {
+    pub(super) pairs: Vec<SelfPair>,
+    pub(super) lanes: PairLanes,
+}
+
+/// Triangles a look takes together ([`Look::run`]): one scan of the hash
+/// over the box around them all.
+pub(super) const RUN: usize = 8;
+
+/// The particles within the box around a run of triangles, in the hash's
+/// order, and their positions (m), coordinate by coordinate; all padded to whole
+/// vector steps (with `u32::MAX`, and NaN, inside no box).
+#[derive(Debug, Default, Clone)]
+pub(super) struct Candidates {
+    /// How many there are (before the padding).
+    pub(super) len: usize,
+    pub(super) p: Vec<u32>,
+    pub(super) x: [Vec<f32>; 3],
+}
+
+/// Lanes of a vector step over the candidates.
+pub(super) const LANES: usize = 8;
+
+impl Candidates {
+    /// The particles of `hash` inside the box `lo..=hi` (m), at positions `x`.
+    fn gather(&mut self, hash: &SpatialHash, (lo, hi): (Vector, Vector), x: &[Vector]) {
+        self.p.clear();
+        hash.for_each_inside(lo, hi, |p, _| self.p.push(p));
+        self.len = self.p.len();
+        let padded = self.len.next_multiple_of(LANES);
+        for coordinate in &mut self.x {
+            coordinate.clear();
+            coordinate.resize(padded, f32::NAN);
+        }
+        // One pass for the three coordinates (one each, by `extend`, read
+        // each position three times).
+        let [cx, cy, cz] = &mut self.x;
+        let (cx, cy, cz) = (
+            &mut cx[..self.len],
+            &mut cy[..self.len],
+            &mut cz[..self.len],
+        );
+        for (k, &p) in self.p.iter().enumerate() {
+            let at = x[p as usize];
+            (cx[k], cy[k], cz[k]) = (at.x, at.y, at.z);
+        }
+        self.p.resize(padded, u32::MAX);
+    }
+
+    /// The candidates: each particle and its position (m).
+    fn iter(&self) -> impl Iterator<Item = (u32, Vector)> + '_ {
+        let [x, y, z] = &self.x;
+        (0..self.len).map(move |k| (self.p[k], Vector::new(x[k], y[k], z[k])))
+    }
+}
+
+/// One look for pairs: the positions and how far to look.
+pub(super) struct Look<'a> {
+    pub(super) x: &'a [Vector],
+    /// Where the particles were a substep before (m), for the pairs'
+    /// sides; empty: from `x`.
+    pub(super) from: &'a [Vector],
+    pub(super) topology: &'a Topology,
+    pub(super) thickness: f32,
+    /// Thickness plus margin, in metres.
+    pub(super) reach: f32,
+    pub(super) margin: f32,
+    /// The CPU has AVX2 ([`Look::facing_candidates`]).
+    pub(super) simd: bool,
+}
+
+/// A triangle as a look tests particles against it: its corners' indices,
+/// first corner `a` and edges `e1`, `e2` (m), unit normal, how far outside
+/// each edge a projection is still taken (barycentric, [`rim_slack`]), the
+/// particles of its smooth sheet, and the box (m) a particle within reach
+/// of it lies in.
+pub(super) struct Facing<'a> {
+    t: u32,
+    tri: [u32; 3],
+    a: Vector,
+    e1: Vector,
+    e2: Vector,
+    n: Vector,
+    slack: [f32; 3],
+    sheet: Sheet<'a>,
+    lo: Vector,
+    hi: Vector,
+}
+
+impl Look<'_> {
+    /// Triangle `t` as the look tests particles against it; none for a
+    /// triangle of no area.
+    #[inline(always)]
+    pub(super) fn facing<'n>(
+        &self,
+        t: usize,
+        neighbours: &'n MeshNeighbours,
+    ) -> Option<Facing<'n>> {
+        let (x, tri) = (self.x, self.topology.triangles[t]);
+        let [a, b, c] = tri.map(|i| x[i as usize]);
+        let (e1, e2) = (b - a, c - a);
+        let normal = e1.cross(e2);
+        let area2 = normal.length();
+        if !is_positive(area2) {
+            return None;
+        }
+        let (n, reach) = (normal / area2, self.reach);
+        let edges = edge_lengths((e1, e2));
+        let rim = rim(self.thickness, edges);
+        // A particle may slide `margin` towards the triangle before the next
+        // look: accept projections that far outside.
+        let slack = rim_slack(self.margin + rim, edges, area2);
+        // Particles of the same smooth sheet as the triangle, up to as far as
+        // a pair can reach from its corners, are left to the springs.
+        let [_, ac, ab] = edges;
+        let sheet = neighbours.sheet(tri, reach + rim + ab.max(ac));
+        let pad = Vector::splat(reach);
+        Some(Facing {
+            t: t as u32,
+            tri,
+            a,
+            e1,
+            e2,
+            n,
+            slack,
+            sheet,
+            lo: a.min(b).min(c) - pad,
+            hi: a.max(b).max(c) + pad,
+        })
+    }
+
+    /// The pair of particle `p` at `xp` (m) with the triangle `f`, if it
+    /// lies within reach of it, outside its sheet and not left to the
+    /// springs ([`MeshNeighbours::left_to_springs`]).
+    #[inline(always)]
+    fn pair(
+        &self,
+        f: &Facing,
+        (p, xp): (u32, Vector),
+        neighbours: &MeshNeighbours,
+    ) -> Option<SelfPair> {
+        let d = (xp - f.a).dot(f.n);
+        if d.abs() >= self.reach || f.sheet.holds(p) {
+            return None;
+        }
+        let [u, v, w] = barycentric(xp - f.n * d - f.a, f.e1, f.e2);
+        let slack = f.slack;
+        if u < -slack[0] || v < -slack[1] || w < -slack[2] || neighbours.left_to_springs(p, f.tri) {
+            return None;
+        }
+        Some(SelfPair {
+            particle: p,
+            triangle: f.t,
+            side: self.side_before(f.tri, p).unwrap_or(side_at(d)),
+        })
+    }
+
+    /// The side (±1) of triangle `tri` particle `p` lay on a substep
+    /// before the look, if the look knows where and it lay off the
+    /// triangle's plane.
+    #[inline]
+    fn side_before(&self, tri: [u32; 3], p: u32) -> Option<f32> {
+        let from = self.from;
+        let [a, b, c] = tri.map(|i| from.get(i as usize).copied());
+        let (a, b, c, xp) = (a?, b?, c?, from.get(p as usize).copied()?);
+        sign((xp - a).dot((b - a).cross(c - a)))
+    }
+
+    /// The side (±1) `edge` lay on from `other` a substep before the look (by
+    /// the two lines' orientation, [`closest`](super::geometry::closest)'s
+    /// normal), if the look knows where and the lines were neither parallel nor
+    /// met.
+    #[inline]
+    pub(super) fn edge_side_before(&self, edge: [u32; 2], other: [u32; 2]) -> Option<f32> {
+        let from = self.from;
+        let at = |i: u32| from.get(i as usize).copied();
+        let (a, b, p, q) = (at(edge[0])?, at(edge[1])?, at(other[0])?, at(other[1])?);
+        sign((a - p).dot((b - a).cross(q - p)))
+    }
+
+    /// Pushes the pairs of the triangles `ts` (at most [`RUN`]) that `skip`
+    /// does not skip to `out`, in triangle order, each triangle's in
+    /// particle order: the particles inside the box around them all
+    /// gathered once (`cand`), each then tested against the triangles
+    /// whose own box holds it. A run too spread out for one box (a mesh's
+    /// triangles in no spatial order) takes a box a triangle.
+    fn run(
+        &self,
+        ts: std::ops::Range<usize>,
+        skip: impl Fn(usize) -> bool,
+        (hash, neighbours): (&SpatialHash, &MeshNeighbours),
+        cand: &mut Candidates,
+        out: &mut Vec<SelfPair>,
+    ) {
+        // Each built in its place (built apart and moved in, a run's
+        // triangles were two copies each of a `Facing`).
+        let mut faces: [Option<Facing>; RUN] = [const { None }; RUN];
+        for (face, t) in faces.iter_mut().zip(ts.clone()) {
+            if !skip(t) {
+                *face = self.facing(t, neighbours);
+            }
+        }
+        let (mut lo, mut hi) = (Vector::INFINITY, Vector::NEG_INFINITY);
+        let mut widest = Vector::ZERO;
+        for f in faces.iter().flatten() {
+            (lo, hi) = (lo.min(f.lo), hi.max(f.hi));
+            widest = widest.max(f.hi - f.lo);
+        }
+        if !lo.cmple(hi).all() {
+            return; // none to look at
+        }
+        // A grid's row of cells spans RUN / 2 cells along the row: up to
+        // that many boxes across one side, about one across the others.
+        let together = (hi - lo).cmple(widest * (RUN as f32 / 2.0 + 1.0)).all();
+        if together {
+            cand.gather(hash, (lo, hi), self.x);
+        }
+        for f in faces.iter().flatten() {
+            if !together {
+                cand.gather(hash, (f.lo, f.hi), self.x);
+            }
+            self.facing_candidates(f, cand, neighbours, out);
+        }
+    }
+
+    /// Pushes the pairs of the triangle `f` among the candidates `cand`
+    /// (those inside its box: [`Look::pair`]) to `out`, in their order.
+    fn facing_candidates(
+        &self,
+        f: &Facing,
+        cand: &Candidates,
+        neighbours: &MeshNeighbours,
+        out: &mut Vec<SelfPair>,
+    ) {
+        let first = out.len();
+        #[cfg(target_arch = "x86_64")]
+        let done = self.simd && {
+            // SAFETY: `simd` only when the CPU has AVX2.
+            unsafe { self.facing_candidates_avx2(f, cand, neighbours, out) };
+            true
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let done = false;
+        if !done {
+            for (p, xp) in cand.iter() {
+                self.candidate(f, (p, xp), neighbours, out);
+            }
+        }
+        // The hash hands the candidates out by bucket: the triangle's few
+        // pairs in particle order, for the same list whatever the table's
+        // size (a sort of the run's candidates took longer).
+        insertion_sort(&mut out[first..]);
+    }
+
+    /// The pair of candidate `p` at `xp` with `f`, pushed to `out`, if it
+    /// lies inside the triangle's box and is a pair ([`Look::pair`]).
+    #[inline(always)]
+    pub(super) fn candidate(
+        &self,
+        f: &Facing,
+        (p, xp): (u32, Vector),
+        neighbours: &MeshNeighbours,
+        out: &mut Vec<SelfPair>,
+    ) {
+        // The hash's own test of its points (ordered: NaN is outside).
+        if xp.cmpge(f.lo).all() && xp.cmple(f.hi).all() {
+            if let Some(pair) = self.pair(f, (p, xp), neighbours) {
+                out.push(pair);
+            }
+        }
+    }
+
+    /// [`Look::facing_candidates`] eight candidates a step: a vector test
+    /// lets through every candidate that may be a pair (its box, its
+    /// distance from the plane and its projection's barycentrics, each a
+    /// hair looser than [`Look::pair`]'s; not a corner), and each of those
+    /// then takes [`Look::candidate`]: the same pairs as one at a time.
+    ///
+    /// # Safety
+    /// The CPU has AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn facing_candidates_avx2(
+        &self,
+        f: &Facing,
+        cand: &Candidates,
+        neighbours: &MeshNeighbours,
+        out: &mut Vec<SelfPair>,
+    ) {
+        use std::arch::x86_64::*;
+        crate::math::align_frame();
+        let [cx, cy, cz] = &cand.x;
+        let len = cand.len;
+        let padded = len.next_multiple_of(LANES);
+        assert!(cx.len() == padded && cy.len() == padded && cz.len() == padded);
+        assert!(cand.p.len() == padded);
+        let splat = _mm256_set1_ps;
+        let (lo, hi, a, n) = (f.lo, f.hi, f.a, f.n);
+        let (e1, e2) = (f.e1, f.e2);
+        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let denom = d11 * d22 - d12 * d12;
+        if !is_positive(denom) {
+            return; // every candidate outside (`barycentric`)
+        }
+        let inv = splat(1.0 / denom);
+        // Looser than the exact test: the inverse instead of a division.
+        let reach = splat(self.reach * (1.0 + 1.0e-4));
+        let slack = f.slack.map(|s| splat(-s - 1.0e-3));
+        let corner = f.tri.map(|c| _mm256_set1_epi32(c as i32));
+        let abs = _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX));
+        let one = splat(1.0);
+        let mut k = 0;
+        while k < len {
+            // SAFETY: `k + LANES <= padded`, the arrays' length (asserted).
+            let (x, y, z, p) = unsafe {
+                (
+                    _mm256_loadu_ps(cx.as_ptr().add(k)),
+                    _mm256_loadu_ps(cy.as_ptr().add(k)),
+                    _mm256_loadu_ps(cz.as_ptr().add(k)),
+                    _mm256_loadu_si256(cand.p.as_ptr().add(k) as *const __m256i),
+                )
+            };
+            let within = |v, lo: f32, hi: f32| {
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_GE_OQ>(v, splat(lo)),
+                    _mm256_cmp_ps::<_CMP_LE_OQ>(v, splat(hi)),
+                )
+            };
+            let boxed = _mm256_and_ps(
+                within(x, lo.x, hi.x),
+                _mm256_and_ps(within(y, lo.y, hi.y), within(z, lo.z, hi.z)),
+            );
+            // The offsets from corner a, the distance from the plane.
+            let (dx, dy, dz) = (
+                _mm256_sub_ps(x, splat(a.x)),
+                _mm256_sub_ps(y, splat(a.y)),
+                _mm256_sub_ps(z, splat(a.z)),
+            );
+            let d = _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(dx, splat(n.x)), _mm256_mul_ps(dy, splat(n.y))),
+                _mm256_mul_ps(dz, splat(n.z)),
+            );
+            let near = _mm256_cmp_ps::<_CMP_NGE_UQ>(_mm256_and_ps(d, abs), reach);
+            // The projection's barycentrics.
+            let (qx, qy, qz) = (
+                _mm256_sub_ps(dx, _mm256_mul_ps(splat(n.x), d)),
+                _mm256_sub_ps(dy, _mm256_mul_ps(splat(n.y), d)),
+                _mm256_sub_ps(dz, _mm256_mul_ps(splat(n.z), d)),
+            );
+            let dot = |e: Vector| {
+                _mm256_add_ps(
+                    _mm256_add_ps(_mm256_mul_ps(qx, splat(e.x)), _mm256_mul_ps(qy, splat(e.y))),
+                    _mm256_mul_ps(qz, splat(e.z)),
+                )
+            };
+            let (dq1, dq2) = (dot(e1), dot(e2));
+            let vb = _mm256_mul_ps(
+                _mm256_sub_ps(
+                    _mm256_mul_ps(splat(d22), dq1),
+                    _mm256_mul_ps(splat(d12), dq2),
+                ),
+                inv,
+            );
+            let w = _mm256_mul_ps(
+                _mm256_sub_ps(
+                    _mm256_mul_ps(splat(d11), dq2),
+                    _mm256_mul_ps(splat(d12), dq1),
+                ),
+                inv,
+            );
+            let u = _mm256_sub_ps(_mm256_sub_ps(one, vb), w);
+            let inside = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_NLT_UQ>(u, slack[0]),
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_NLT_UQ>(vb, slack[1]),
+                    _mm256_cmp_ps::<_CMP_NLT_UQ>(w, slack[2]),
+                ),
+            );
+            // Not a corner (the padding is outside every box).
+            let corner = _mm256_or_si256(
+                _mm256_cmpeq_epi32(p, corner[0]),
+                _mm256_or_si256(
+                    _mm256_cmpeq_epi32(p, corner[1]),
+                    _mm256_cmpeq_epi32(p, corner[2]),
+                ),
+            );
+            let keep = _mm256_andnot_ps(
+                _mm256_castsi256_ps(corner),
+                _mm256_and_ps(_mm256_and_ps(boxed, near), inside),
+            );
+            let mut bits = _mm256_movemask_ps(keep) as u32;
+            while bits != 0 {
+                let j = k + bits.trailing_zeros() as usize;
+                let xp = Vector::new(cx[j], cy[j], cz[j]);
+                self.candidate(f, (cand.p[j], xp), neighbours, out);
+                bits &= bits - 1;
+            }
+            k += LANES;
+        }
+    }
+}
+
+impl SelfContacts {
+    /// Finds the particles within reach of triangles they are not
+    /// neighbours of, at positions `x`: blocks of triangles on the `team`,
+    /// their pairs then joined in triangle order (the same list on any
+    /// number of threads).
+    pub(super) fn find_pairs(
+        &mut self,
+        (x, from): (&[Vector], &[Vector]),
+        topology: &Topology,
+        thickness: f32,
+        team: Team,
+    ) {
+        (self.pairs, self.used_blocks) = (0, 0);
+        self.edge_pairs.clear();
+        // For the test of the motions: the look's longest edge, and the
+        // ends of the edges it may pair (none yet: every particle counts
+        // as one).
+        self.longest_edge = self.neighbours.longest_at(x);
+        self.edge_ends.clear();
+        let triangles = &topology.triangles;
+        if triangles.is_empty() {
+            return;
+        }
+        let simd = simd_available() && !self.portable;
+        let look = Look {
+            x,
+            from: if from.len() == x.len() { from } else { &[] },
+            topology,
+            thickness,
+            reach: thickness + self.margin,
+            margin: self.margin,
+            simd,
+        };
+        // Cells about twice a triangle's width or the reach: a triangle's
+        // box meets a few (drape N = 64: 8% faster a frame than cells of
+        // one width, 6% than three).
+        let longest = self.neighbours.longest();
+        self.hash
+            .build(x, 2.0 * longest.max(look.reach).max(1.0e-4));
+        self.patches
+            .update(x, topology.grid_pieces(), triangles, look.reach);
+        let blocks = triangles.len().div_ceil(TRIANGLE_BLOCK);
+        if self.blocks.len() < blocks {
+            self.blocks.resize_with(blocks, PairList::default);
+        }
+        let borders = self.neighbours.border_edges();
+        let border_blocks = borders.len().div_ceil(BORDER_BLOCK);
+        if self.border_blocks.len() < border_blocks {
+            self.border_blocks
+                .resize_with(border_blocks, EdgeList::default);
+        }
+        self.plane.update(x);
+        self.triangle_pairs.resize(triangles.len(), [0, 0]);
+        self.normals.resize(triangles.len(), Vector::ZERO);
+        let (hash, neighbours, patches) = (&self.hash, &self.neighbours, &self.patches);
+        let plane = &self.plane;
+        let ranges = Disjoint::new(&mut self.triangle_pairs[..]);
+        let normals = Disjoint::new(&mut self.normals[..]);
+        let lists = Disjoint::new(&mut self.blocks[..blocks]);
+        let edge_lists = Disjoint::new(&mut self.border_blocks[..border_blocks]);
+        // The triangles' blocks, then the border edges' (serial, they
+        // were a tenth of the `fold`'s frame), in one handout.
+        let found = team.sum_count_uneven(blocks + border_blocks, |k| {
+            if k >= blocks {
+                let e = k - blocks;
+                // SAFETY: block `e` alone uses edge list `e`.
+                let EdgeList(list, _) = unsafe { &mut edge_lists.range(e..e + 1)[0] };
+                list.clear();
+                let end = ((e + 1) * BORDER_BLOCK).min(borders.len());
+                for &border in &borders[e * BORDER_BLOCK..end] {
+                    if !border.iter().all(|&p| patches.quiet_particle(p as usize)) {
+                        look.border_edge(border, (hash, neighbours), list);
+                    }
+                }
+                return 0;
+            }
+            // SAFETY: block `k` alone uses list `k`.
+            let PairList(list, candidates, parts) = unsafe { &mut lists.range(k..k + 1)[0] };
+            list.clear();
+            let end = ((k + 1) * TRIANGLE_BLOCK).min(triangles.len());
+            // A run at a time: a grid's triangles of a few cells along a
+            // row (and a mesh's neighbours, mostly) share most of their
+            // box, whose scan of the hash is then paid once.
+            for t in (k * TRIANGLE_BLOCK..end).step_by(RUN) {
+                let run = t..(t + RUN).min(end);
+                let quiet = |t| patches.quiet_triangle(t);
+                look.run(run, quiet, (hash, neighbours), candidates, list);
+            }
+            // Where each triangle's pairs lie in the list (for the sharp
+            // folds' edges).
+            // SAFETY: block `k` alone writes its triangles' ranges.
+            let ranges = unsafe { ranges.range(k * TRIANGLE_BLOCK..end) };
+            ranges.fill([0, 0]);
+            let mut start = 0;
+            for run in list.chunk_by(|a, b| a.triangle == b.triangle) {
+                let t = run[0].triangle as usize - k * TRIANGLE_BLOCK;
+                ranges[t] = [start as u32, (start + run.len()) as u32];
+                start += run.len();
+            }
+            // Its triangles' unit normals (for the sharp folds).
+            // SAFETY: block `k` alone writes its triangles' normals.
+            let normals = unsafe { normals.range(k * TRIANGLE_BLOCK..end) };
+            for (n, tri) in normals.iter_mut().zip(&triangles[k * TRIANGLE_BLOCK..end]) {
+                let [a, b, c] = tri.map(|i| x[i as usize]);
+                *n = (b - a).cross(c - a).normalize_or_zero();
+            }
+            // The block's pairs in the pass's parts, on its own thread.
+            plane.part(list, (triangles, x.len()), simd, parts);
+            headroom(list);
+            list.len() as u32
+        }) as usize;
+        (self.pairs, self.used_blocks) = (found, blocks);
+        self.edge_pairs.clear();
+        for list in &mut self.border_blocks[..border_blocks] {
+            self.edge_pairs.extend_from_slice(&list.0);
+            headroom(&mut list.0);
+        }
+        let first_fold = self.edge_pairs.len();
+        self.find_folds(x.len());
+        // The ends of the edges this look may pair: the border's and the
+        // sharp folds'.
+        self.edge_ends.clone_from(&self.on_fold);
+        for &border in self.neighbours.border_edges() {
+            for p in border {
+                if let Some(end) = self.edge_ends.get_mut(p as usize) {
+                    *end = true;
+                }
+            }
+        }
+        self.pair_folds(&look, team);
+        let fold_blocks = self.folds.len().div_ceil(FOLD_BLOCK);
+        for list in &mut self.fold_blocks[..fold_blocks] {
+            self.edge_pairs.extend_from_slice(&list.0);
+            headroom(&mut list.0);
+        }
+        // Two folds' edges near each other are found from both: once, in
+        // the order of their edges whatever the blocks. (The border's
+        // pairs before them are each found once: the dedup leaves them.)
+        self.edge_pairs[first_fold..].sort_unstable_by_key(|e| (e.edge, e.other));
+        self.edge_pairs.dedup_by_key(|e| (e.edge, e.other));
+        headroom(&mut self.edge_pairs);
+    }
+}
+
+/// Sorts a few pairs by particle (the pairs of one triangle: a handful).
+pub(super) fn insertion_sort(pairs: &mut [SelfPair]) {
+    for i in 1..pairs.len() {
+        let mut j = i;
+        while j > 0 && pairs[j - 1].particle > pairs[j].particle {
+            pairs.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+}
+
+/// Makes room for twice the list's length, so that a step whose pairs
+/// grow by less than that allocates nothing (a warmed-up step allocates
+/// only when the contacts more than double).
+pub(super) fn headroom<T>(list: &mut Vec<T>) {
+    if list.capacity() < 2 * list.len() {
+        list.reserve(list.len());
+    }
+}
