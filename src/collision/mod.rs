@@ -9,7 +9,7 @@
 //! the cloth cannot cut through edges and corners.
 //!
 //! Self-collision keeps the cloth's own layers a thickness apart
-//! ([`SelfContacts`]); [`self_intersections`] counts where they are not.
+//! ([`SelfContacts`]); [`self_intersections()`] counts where they are not.
 
 mod backing;
 pub(crate) mod contact;

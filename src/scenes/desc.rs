@@ -1,5 +1,6 @@
-//! Scene descriptions: everything a scene is made of, as plain data that
-//! serde reads from and writes to scene files (see [`crate::scenes::file`]).
+//! Scene descriptions: everything a scene is made of, as plain data that serde
+//! reads from and writes to scene files (see `scenes::file`, with the feature
+//! `scene-files`).
 //!
 //! The canonical scenes are themselves built from a [`SceneDesc`]
 //! ([`crate::scenes::SceneKind::desc`]), so a canonical scene written to a

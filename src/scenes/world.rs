@@ -86,7 +86,7 @@ impl Scene {
     }
 
     /// A canonical scene by name, or else a RON scene file by path (see
-    /// [`super::file`]), with `options` applied.
+    /// `scenes::file`, with the feature `scene-files`), with `options` applied.
     pub fn open(name_or_path: &str, options: &SceneOptions) -> Result<Scene, SceneError> {
         if let Ok(kind) = SceneKind::from_name(name_or_path) {
             return Scene::build(kind, options);

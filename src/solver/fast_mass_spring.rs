@@ -66,7 +66,8 @@ fn add(a: &mut [f64; 3], v: Vector, s: f64) {
 ///
 /// Contacts and friction enter the solve: every particle that touches a
 /// fixed or kinematic obstacle, or will reach it within the substep, is
-/// classified from the start state ([`respond`]). One held by static
+/// classified from the start state
+/// ([`respond`](crate::collision::respond)). One held by static
 /// friction gets a stiff spring (weight [`CONTACT_WEIGHT`] times its
 /// diagonal) to where the surface carries it, so the cloth around it answers
 /// in the same solve; the weights change the matrix's diagonal only, so a

@@ -19,11 +19,11 @@ use crate::collision::Obstacle;
 use crate::math::{Pose, Vector};
 
 /// A still convex shape other than a ball, capsule, half-space or cuboid
-/// as the lanes take it ([`StillShape::Convex`]): as a cuboid, a lane is
+/// as the lanes take it (`StillShape::Convex`): as a cuboid, a lane is
 /// held by the tangent plane of the shape (rounded by the thickness) at
 /// the point nearest to where it started the substep, when it started
 /// within `reach` (m) of the shape. The plane is found once a substep by
-/// the collision stage's contact ([`crate::collision::contact`]), for the lanes
+/// the collision stage's contact ([`crate::collision::contact()`]), for the lanes
 /// that start inside the box (m) around the shape and its reach only. A
 /// cylinder (a round table, a pole) or a cone went to the collision
 /// stage after every substep before: 70% of a frame of 32 substeps.
@@ -131,12 +131,12 @@ impl StillConvex {
     }
 }
 
-/// The faces of the still convex hulls the lanes hold, in the world,
-/// found at [`LaneContacts::begin`]: a lane whose start projects onto the
-/// face it is farthest beyond (or is inside the hull) takes that face's
-/// plane, without parry's projection on a support map (iterative, and
-/// inside the hull by its expanding polytope): a cloth on a hull's faces
-/// took 5 times a cuboid's time a frame so.
+/// The faces of the still convex hulls the lanes hold, in the world, found at
+/// [`LaneContacts::begin_holding`](super::lane_contacts::LaneContacts::begin_holding):
+/// a lane whose start projects onto the face it is farthest beyond (or is
+/// inside the hull) takes that face's plane, without parry's projection on a
+/// support map (iterative, and inside the hull by its expanding polytope): a
+/// cloth on a hull's faces took 5 times a cuboid's time a frame so.
 #[derive(Debug, Default)]
 pub(super) struct HullFaces {
     /// Per face: outward unit normal and offset (m; the face lies in

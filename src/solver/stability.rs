@@ -321,7 +321,7 @@ fn chain_substeps_per_second(cloth: &Cloth) -> f32 {
 /// The substeps that keep the integrator of `settings` within its
 /// stability limit for a frame step `dt` (with the small-steps solver's
 /// chain solves, at least 960 a second, more on a fine grid:
-/// [`chain_substeps_per_second`]).
+/// `chain_substeps_per_second`).
 pub fn stable_substeps(cloth: &Cloth, settings: &SolverSettings, dt: f32) -> u32 {
     substeps_at_least(cloth, settings, dt, chain_substeps_per_second(cloth))
 }
@@ -386,7 +386,7 @@ const SELF_CLOSING_SPEED: f32 = 6.4;
 /// `stack` over 42 starts (N = 26–38 in steps of 2, cotton, silk and
 /// denim, 60 and 50 Hz; crossed in some frame / still at the end). With a
 /// triangle's one-ring paired on a grid
-/// ([`crate::collision::MeshNeighbours`]) and every material at one
+/// (`MeshNeighbours`) and every material at one
 /// count: at 1440 (24 substeps at 60 Hz, 29 at 50) 1 / 0, as at the
 /// sweeps' own (cotton 28 and 33, denim 46 and 55, silk 17 and 21) 2 / 0;
 /// at 1320 (22 and 27) 6 / 2; at 1200 (20 and 24) 5 / 1, the crossings at

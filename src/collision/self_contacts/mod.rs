@@ -121,8 +121,9 @@ pub struct SelfLook {
 }
 
 /// The self-collision stage of a cloth's solver: its pairs and scratch.
-/// The pairs are those of the last look ([`SelfLook`]), found again from
-/// its positions when the scratch is fresh or the cloth changed.
+/// The pairs are those of the last look (`SelfLook`, in the solver's
+/// state), found again from its positions when the scratch is fresh or
+/// the cloth changed.
 #[derive(Debug, Default, Clone)]
 pub struct SelfContacts {
     /// The particles by cell, at the last look.

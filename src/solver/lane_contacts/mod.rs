@@ -459,7 +459,8 @@ impl LaneContacts {
     /// the tangent plane of the rounded shape at the point nearest to the start
     /// ([`cuboid_plane`](still_cuboid::cuboid_plane),
     /// [`convex_plane`](super::lane_convex::convex_plane)). Once a substep,
-    /// after [`Self::begin`] with the same `obstacles` and before the passes.
+    /// after [`Self::begin_holding`] with the same `obstacles` and before the
+    /// passes.
     pub fn take_planes(&mut self, obstacles: &[Obstacle], lanes: &mut Lanes, team: Team) {
         let n = self.lanes;
         let [_, _, _, sx, sy, sz, lw] = lanes.disjoint();
