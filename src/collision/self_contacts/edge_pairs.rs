@@ -1,9 +1,12 @@
 //! The edges a look pairs: the border's and the sharp folds' with the edges
 //! near them.
 
+use super::contacts::SelfContacts;
 use super::geometry::{closest, side_at};
-use super::look::{EdgeList, Look, LANES, TRIANGLE_BLOCK};
-use super::{EdgePair, SelfContacts};
+use super::lists::EdgeList;
+use super::look::{Look, FOLD_BLOCK, TRIANGLE_BLOCK};
+use super::pair_lanes::LANES;
+use super::pairs::EdgePair;
 use crate::collision::neighbours::{MeshNeighbours, Sheet};
 use crate::collision::spatial_hash::SpatialHash;
 use crate::math::Vector;
@@ -25,9 +28,6 @@ use crate::parallel::{Disjoint, Team};
 /// (0) and 2 (0) starts, and one pairing every edge with every edge near
 /// it in 2 (0), at four times the frame.
 pub(super) const SHARP_FOLD: f32 = 30.0 * std::f32::consts::PI / 180.0;
-
-/// Sharp folds' edges a thread takes at a time in a look for pairs.
-pub(super) const FOLD_BLOCK: usize = 64;
 
 impl Look<'_> {
     /// Pushes the edges within reach of the border edge `[a, b]` that are
@@ -96,7 +96,7 @@ impl Look<'_> {
     /// border edge's neighbour nor of its `sheet`, and two border edges
     /// once.
     #[inline(always)]
-    fn border_pair(
+    pub(super) fn border_pair(
         &self,
         [e, f]: [u32; 2],
         (ia, ib, a, u): (u32, u32, Vector, Vector),
@@ -125,7 +125,7 @@ impl Look<'_> {
     /// along `v`) when their closest points lie inside both and within
     /// reach, with the side `edge` lies on.
     #[inline(always)]
-    fn within_reach(
+    pub(super) fn within_reach(
         &self,
         (edge, a, u): ([u32; 2], Vector, Vector),
         (other, p, v): ([u32; 2], Vector, Vector),
@@ -145,7 +145,13 @@ impl Look<'_> {
     /// of its smooth `sheet` (as far as a pair reaches plus twice its
     /// length).
     #[inline]
-    fn fold_pair(&self, edge: [u32; 2], other: [u32; 2], sheet: &Sheet, out: &mut Vec<EdgePair>) {
+    pub(super) fn fold_pair(
+        &self,
+        edge: [u32; 2],
+        other: [u32; 2],
+        sheet: &Sheet,
+        out: &mut Vec<EdgePair>,
+    ) {
         if other.iter().any(|p| edge.contains(p) || sheet.holds(*p)) {
             return;
         }
@@ -167,7 +173,7 @@ impl Look<'_> {
     /// that [`Self::border_pair`] would find apart from the border edge
     /// from `a` along `u` (m) are left out.
     #[inline(always)]
-    fn ring_near(
+    pub(super) fn ring_near(
         &self,
         ends: &[u32],
         xe: Vector,
@@ -207,7 +213,7 @@ impl Look<'_> {
     /// [`LANES`] ends.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn ring_near_avx2(
+    pub(super) unsafe fn ring_near_avx2(
         &self,
         ends: &[u32],
         xe: Vector,

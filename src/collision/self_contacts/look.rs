@@ -1,9 +1,10 @@
 //! A look for pairs: the triangles in runs, against the hash of the particles.
 
-use super::edge_pairs::FOLD_BLOCK;
+use super::contacts::SelfContacts;
 use super::geometry::{barycentric, edge_lengths, is_positive, rim, rim_slack, side_at, sign};
-use super::pair_lanes::PairLanes;
-use super::{EdgePair, SelfContacts, SelfPair};
+use super::lists::{headroom, insertion_sort, Candidates, EdgeList, PairList};
+use super::pair_lanes::LANES;
+use super::pairs::SelfPair;
 use crate::cloth::Topology;
 use crate::collision::neighbours::{MeshNeighbours, Sheet};
 use crate::collision::spatial_hash::SpatialHash;
@@ -17,81 +18,12 @@ pub(super) const TRIANGLE_BLOCK: usize = 256;
 /// Border edges a thread takes at a time in a look for pairs.
 pub(super) const BORDER_BLOCK: usize = 64;
 
-/// The edge pairs a block of border edges or sharp folds found, alone on
-/// its cache lines, and its scratch of candidate edges.
-#[derive(Debug, Default, Clone)]
-#[repr(align(128))]
-pub(super) struct EdgeList(pub(super) Vec<EdgePair>, pub(super) Vec<[u32; 2]>);
-
-/// The pairs a block of triangles found, alone on its cache lines (blocks
-/// on different threads push at once), in triangle order; the candidates
-/// of its runs of triangles ([`Look::run`]); and its pairs in the pass's
-/// three parts ([`PassPlane`](super::pass_plane::PassPlane)), with their lanes.
-#[derive(Debug, Default, Clone)]
-#[repr(align(128))]
-pub(super) struct PairList(
-    pub(super) Vec<SelfPair>,
-    pub(super) Candidates,
-    pub(super) [PartPairs; 3],
-);
-
-/// The pairs of one block in one part of the pass, and their lanes.
-#[derive(Debug, Default, Clone)]
-pub(super) struct PartPairs {
-    pub(super) pairs: Vec<SelfPair>,
-    pub(super) lanes: PairLanes,
-}
+/// Sharp folds' edges a thread takes at a time in a look for pairs.
+pub(super) const FOLD_BLOCK: usize = 64;
 
 /// Triangles a look takes together ([`Look::run`]): one scan of the hash
 /// over the box around them all.
 pub(super) const RUN: usize = 8;
-
-/// The particles within the box around a run of triangles, in the hash's
-/// order, and their positions (m), coordinate by coordinate; all padded to whole
-/// vector steps (with `u32::MAX`, and NaN, inside no box).
-#[derive(Debug, Default, Clone)]
-pub(super) struct Candidates {
-    /// How many there are (before the padding).
-    pub(super) len: usize,
-    pub(super) p: Vec<u32>,
-    pub(super) x: [Vec<f32>; 3],
-}
-
-/// Lanes of a vector step over the candidates.
-pub(super) const LANES: usize = 8;
-
-impl Candidates {
-    /// The particles of `hash` inside the box `lo..=hi` (m), at positions `x`.
-    fn gather(&mut self, hash: &SpatialHash, (lo, hi): (Vector, Vector), x: &[Vector]) {
-        self.p.clear();
-        hash.for_each_inside(lo, hi, |p, _| self.p.push(p));
-        self.len = self.p.len();
-        let padded = self.len.next_multiple_of(LANES);
-        for coordinate in &mut self.x {
-            coordinate.clear();
-            coordinate.resize(padded, f32::NAN);
-        }
-        // One pass for the three coordinates (one each, by `extend`, read
-        // each position three times).
-        let [cx, cy, cz] = &mut self.x;
-        let (cx, cy, cz) = (
-            &mut cx[..self.len],
-            &mut cy[..self.len],
-            &mut cz[..self.len],
-        );
-        for (k, &p) in self.p.iter().enumerate() {
-            let at = x[p as usize];
-            (cx[k], cy[k], cz[k]) = (at.x, at.y, at.z);
-        }
-        self.p.resize(padded, u32::MAX);
-    }
-
-    /// The candidates: each particle and its position (m).
-    fn iter(&self) -> impl Iterator<Item = (u32, Vector)> + '_ {
-        let [x, y, z] = &self.x;
-        (0..self.len).map(move |k| (self.p[k], Vector::new(x[k], y[k], z[k])))
-    }
-}
 
 /// One look for pairs: the positions and how far to look.
 pub(super) struct Look<'a> {
@@ -114,16 +46,16 @@ pub(super) struct Look<'a> {
 /// particles of its smooth sheet, and the box (m) a particle within reach
 /// of it lies in.
 pub(super) struct Facing<'a> {
-    t: u32,
-    tri: [u32; 3],
-    a: Vector,
-    e1: Vector,
-    e2: Vector,
-    n: Vector,
-    slack: [f32; 3],
-    sheet: Sheet<'a>,
-    lo: Vector,
-    hi: Vector,
+    pub(super) t: u32,
+    pub(super) tri: [u32; 3],
+    pub(super) a: Vector,
+    pub(super) e1: Vector,
+    pub(super) e2: Vector,
+    pub(super) n: Vector,
+    pub(super) slack: [f32; 3],
+    pub(super) sheet: Sheet<'a>,
+    pub(super) lo: Vector,
+    pub(super) hi: Vector,
 }
 
 impl Look<'_> {
@@ -172,7 +104,7 @@ impl Look<'_> {
     /// lies within reach of it, outside its sheet and not left to the
     /// springs ([`MeshNeighbours::left_to_springs`]).
     #[inline(always)]
-    fn pair(
+    pub(super) fn pair(
         &self,
         f: &Facing,
         (p, xp): (u32, Vector),
@@ -198,7 +130,7 @@ impl Look<'_> {
     /// before the look, if the look knows where and it lay off the
     /// triangle's plane.
     #[inline]
-    fn side_before(&self, tri: [u32; 3], p: u32) -> Option<f32> {
+    pub(super) fn side_before(&self, tri: [u32; 3], p: u32) -> Option<f32> {
         let from = self.from;
         let [a, b, c] = tri.map(|i| from.get(i as usize).copied());
         let (a, b, c, xp) = (a?, b?, c?, from.get(p as usize).copied()?);
@@ -223,7 +155,7 @@ impl Look<'_> {
     /// gathered once (`cand`), each then tested against the triangles
     /// whose own box holds it. A run too spread out for one box (a mesh's
     /// triangles in no spatial order) takes a box a triangle.
-    fn run(
+    pub(super) fn run(
         &self,
         ts: std::ops::Range<usize>,
         skip: impl Fn(usize) -> bool,
@@ -264,7 +196,7 @@ impl Look<'_> {
 
     /// Pushes the pairs of the triangle `f` among the candidates `cand`
     /// (those inside its box: [`Look::pair`]) to `out`, in their order.
-    fn facing_candidates(
+    pub(super) fn facing_candidates(
         &self,
         f: &Facing,
         cand: &Candidates,
@@ -319,7 +251,7 @@ impl Look<'_> {
     /// The CPU has AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn facing_candidates_avx2(
+    pub(super) unsafe fn facing_candidates_avx2(
         &self,
         f: &Facing,
         cand: &Candidates,
@@ -580,25 +512,5 @@ impl SelfContacts {
         self.edge_pairs[first_fold..].sort_unstable_by_key(|e| (e.edge, e.other));
         self.edge_pairs.dedup_by_key(|e| (e.edge, e.other));
         headroom(&mut self.edge_pairs);
-    }
-}
-
-/// Sorts a few pairs by particle (the pairs of one triangle: a handful).
-pub(super) fn insertion_sort(pairs: &mut [SelfPair]) {
-    for i in 1..pairs.len() {
-        let mut j = i;
-        while j > 0 && pairs[j - 1].particle > pairs[j].particle {
-            pairs.swap(j - 1, j);
-            j -= 1;
-        }
-    }
-}
-
-/// Makes room for twice the list's length, so that a step whose pairs
-/// grow by less than that allocates nothing (a warmed-up step allocates
-/// only when the contacts more than double).
-pub(super) fn headroom<T>(list: &mut Vec<T>) {
-    if list.capacity() < 2 * list.len() {
-        list.reserve(list.len());
     }
 }

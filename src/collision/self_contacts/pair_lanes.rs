@@ -1,10 +1,12 @@
 //! The vector test of a pass: a look's pairs as lanes, eight at a time.
 
-use super::look::LANES;
-use super::pass::Points;
-use super::SelfPair;
+use super::pairs::SelfPair;
+use super::points::Points;
 #[cfg(target_arch = "x86_64")]
 use crate::math::{cross_lanes, dot_lanes, load_vectors};
+
+/// Lanes of a vector step over the candidates.
+pub(super) const LANES: usize = 8;
 
 /// A look's pairs as lanes
 /// ([`SelfContacts::resolve`](super::SelfContacts::resolve)'s vector test):
@@ -14,15 +16,15 @@ use crate::math::{cross_lanes, dot_lanes, load_vectors};
 pub(super) struct PairLanes {
     /// The CPU has AVX2 and the lanes are to be used (else they are left
     /// empty).
-    simd: bool,
+    pub(super) simd: bool,
     /// Pairs, before the padding; the particles their indices are below.
-    len: usize,
-    particles: usize,
+    pub(super) len: usize,
+    pub(super) particles: usize,
     /// A pair had an index out of range, or no triangle: not to be used.
-    broken: bool,
-    p: Vec<i32>,
-    corners: [Vec<i32>; 3],
-    side: Vec<f32>,
+    pub(super) broken: bool,
+    pub(super) p: Vec<i32>,
+    pub(super) corners: [Vec<i32>; 3],
+    pub(super) side: Vec<f32>,
 }
 
 impl PairLanes {
@@ -101,7 +103,12 @@ impl PairLanes {
     /// pairs meanwhile.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn busy_avx2(&self, k: usize, x: &Points, (thickness, margin): (f32, f32)) -> u32 {
+    pub(super) unsafe fn busy_avx2(
+        &self,
+        k: usize,
+        x: &Points,
+        (thickness, margin): (f32, f32),
+    ) -> u32 {
         use std::arch::x86_64::*;
         assert!(k + LANES <= self.p.len() && self.p.len() == self.side.len());
         assert!(self.corners.iter().all(|c| c.len() == self.p.len()));

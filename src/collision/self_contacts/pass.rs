@@ -1,55 +1,16 @@
-//! A substep's pass over the pairs (the module docs of `self_contacts`).
+//! A substep's pass over the pairs, and the triangle it works with.
 
+use super::contacts::SelfContacts;
 use super::geometry::{barycentric, clamped, closest, edge_lengths, is_positive, rim, rim_slack};
-use super::look::{PartPairs, LANES};
+use super::lists::PartPairs;
+use super::pair_lanes::LANES;
+use super::pairs::SelfPair;
+use super::params::SelfContactParams;
 use super::pass_plane::PARALLEL_MIN_PAIRS;
-use super::{SelfContactParams, SelfContacts, SelfPair};
+use super::points::Points;
 use crate::cloth::{Particles, Topology};
 use crate::math::Vector;
 use crate::parallel::{Disjoint, Team};
-
-/// A particle array as the parts of a pass share it
-/// ([`SelfContacts::resolve`]): each part reads and writes only particles
-/// no other part running at the same time touches.
-pub(super) struct Points<'a> {
-    pub(super) ptr: *mut Vector,
-    pub(super) len: usize,
-    pub(super) _array: std::marker::PhantomData<&'a mut [Vector]>,
-}
-
-impl<'a> Points<'a> {
-    /// The array `of`, for one part.
-    ///
-    /// # Safety
-    /// While this lives, no other user of the array touches a particle
-    /// this one does.
-    unsafe fn new(of: Disjoint<'a, Vector>) -> Points<'a> {
-        Points {
-            ptr: of.as_ptr(),
-            len: of.len(),
-            _array: std::marker::PhantomData,
-        }
-    }
-}
-
-impl std::ops::Index<usize> for Points<'_> {
-    type Output = Vector;
-    #[inline(always)]
-    fn index(&self, i: usize) -> &Vector {
-        assert!(i < self.len);
-        // SAFETY: in bounds; no other part touches particle `i` (`new`).
-        unsafe { &*self.ptr.add(i) }
-    }
-}
-
-impl std::ops::IndexMut<usize> for Points<'_> {
-    #[inline(always)]
-    fn index_mut(&mut self, i: usize) -> &mut Vector {
-        assert!(i < self.len);
-        // SAFETY: as for `index`.
-        unsafe { &mut *self.ptr.add(i) }
-    }
-}
 
 impl SelfContacts {
     /// The pairs of the last look's blocks, in the pass's `part`.
@@ -124,7 +85,7 @@ impl SelfContacts {
     /// The pass over part `k` of the pairs
     /// ([`PassPlane`](super::pass_plane::PassPlane)); returns how many were
     /// closer than the thickness.
-    fn part_pass(
+    pub(super) fn part_pass(
         &self,
         k: usize,
         (x, v, inv_mass): (&mut Points, &mut Points, &[f32]),
@@ -137,7 +98,7 @@ impl SelfContacts {
 
     /// The pass over one block's pairs of a part; returns how many were
     /// closer than the thickness.
-    fn block_pass(
+    pub(super) fn block_pass(
         &self,
         part: &PartPairs,
         (x, v, inv_mass): (&mut Points, &mut Points, &[f32]),
@@ -192,7 +153,7 @@ impl SelfContacts {
     /// `near` when it is that pair's triangle (else found again there);
     /// returns 1 when the pair was closer than the thickness, else 0.
     #[inline(always)]
-    fn pair_pass(
+    pub(super) fn pair_pass(
         &self,
         pair: &SelfPair,
         near: &mut Option<Near>,
@@ -292,20 +253,24 @@ impl SelfContacts {
 /// squared length, and, once a pair needs them, its length and the rim's
 /// slack ([`rim_slack`]).
 pub(super) struct Near {
-    t: u32,
-    tri: [usize; 3],
-    a: Vector,
-    e1: Vector,
-    e2: Vector,
-    normal: Vector,
-    len2: f32,
-    slack: Option<Option<(f32, [f32; 3])>>,
+    pub(super) t: u32,
+    pub(super) tri: [usize; 3],
+    pub(super) a: Vector,
+    pub(super) e1: Vector,
+    pub(super) e2: Vector,
+    pub(super) normal: Vector,
+    pub(super) len2: f32,
+    pub(super) slack: Option<Option<(f32, [f32; 3])>>,
 }
 
 impl Near {
     /// Triangle `t` with corners `tri` at positions `x`.
     #[inline]
-    fn of(t: u32, tri: [u32; 3], x: &impl std::ops::Index<usize, Output = Vector>) -> Near {
+    pub(super) fn of(
+        t: u32,
+        tri: [u32; 3],
+        x: &impl std::ops::Index<usize, Output = Vector>,
+    ) -> Near {
         let tri = tri.map(|i| i as usize);
         let [a, b, c] = tri.map(|i| x[i]);
         let (e1, e2) = (b - a, c - a);
@@ -325,7 +290,7 @@ impl Near {
     /// `|e1 × e2|` and the rim's slack for layers `thickness` thick (m);
     /// none for a triangle of no area. Found at the first call.
     #[inline]
-    fn rim_slack(&mut self, thickness: f32) -> Option<(f32, [f32; 3])> {
+    pub(super) fn rim_slack(&mut self, thickness: f32) -> Option<(f32, [f32; 3])> {
         *self.slack.get_or_insert_with(|| {
             let len = self.len2.sqrt();
             let edges = edge_lengths((self.e1, self.e2));

@@ -1,7 +1,7 @@
 //! How a look's pairs are parted so that a pass takes two parts at once.
 
-use super::look::{headroom, PartPairs};
-use super::SelfPair;
+use super::lists::{headroom, PartPairs};
+use super::pairs::SelfPair;
 use crate::math::Vector;
 
 /// How a look's pairs are parted for the pass
@@ -15,9 +15,9 @@ use crate::math::Vector;
 #[derive(Debug, Default, Clone)]
 pub(super) struct PassPlane {
     /// Per particle: below the plane.
-    below: Vec<bool>,
+    pub(super) below: Vec<bool>,
     /// The particles' coordinates across the plane (scratch).
-    across: Vec<f32>,
+    pub(super) across: Vec<f32>,
 }
 
 /// Pairs from which the two parts of a pass run on two threads.

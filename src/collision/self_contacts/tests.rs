@@ -1,10 +1,15 @@
 //! Self-collision's unit tests: the looks, the pass and their bits.
 
+use super::contacts::{motion_box, SelfContacts};
 use super::geometry::closest;
-use super::look::{Look, PartPairs};
+use super::lists::PartPairs;
+use super::look::Look;
+use super::pairs::SelfPair;
+use super::params::{LookBasis, SelfContactParams};
 use super::pass_plane::PARALLEL_MIN_PAIRS;
-use super::*;
 use crate::cloth::ClothBuilder;
+use crate::math::{simd_available, Vector};
+use crate::parallel::Team;
 
 impl SelfContacts {
     /// Every pair of the last look, in triangle order.
