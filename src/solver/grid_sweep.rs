@@ -1146,7 +1146,7 @@ pub(crate) fn limit_stretch_again(
 /// Per lane, the planes that hold it, one in each of `slots` blocks of
 /// `lanes` entries (unit normal x, y, z and offset, m: the lane stays
 /// where `normal · x ≥ offset`; an offset of −∞ for none), as the lanes'
-/// contacts take their cuboids' (`lane_contacts.rs`).
+/// contacts take their cuboids' (`lane_contacts`).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct LanePlanes<'a> {
     pub arrays: [&'a [f32]; 4],

@@ -28,7 +28,7 @@ pub(crate) struct SubstepOutcome {
     /// can be over it.
     pub stretch_settled: bool,
     /// The integrator held every obstacle's contacts inside the substep
-    /// (xpbd's lanes, `lane_contacts.rs`): the collision stage may wait
+    /// (xpbd's lanes, `lane_contacts`): the collision stage may wait
     /// for the step's last substep.
     pub contacts_held: bool,
     /// The integrator held the still obstacles' contacts inside the

@@ -1,6 +1,6 @@
 //! The still convex shapes other than balls, capsules, half-spaces and
 //! cuboids (cylinders, cones, convex hulls) as the small-steps solver's
-//! lanes hold them (`lane_contacts.rs`): as a cuboid, each takes a slot of
+//! lanes hold them (`lane_contacts`): as a cuboid, each takes a slot of
 //! the lanes' plane records, and each lane, once a substep, the tangent
 //! plane of the shape at the point nearest where the lane starts the
 //! substep, moved out by the thickness. A convex shape lies behind each of

@@ -1,6 +1,6 @@
 //! Still triangle meshes (a table imported as a model, a floor of level
 //! geometry) and heightfields (terrain) as the small-steps solver's lanes
-//! hold them (`lane_contacts.rs`): as a convex shape is held
+//! hold them (`lane_contacts`): as a convex shape is held
 //! (`lane_convex.rs`), each lane, once a substep, takes the plane through
 //! the point of the mesh nearest where it starts the substep, square to
 //! the line from there to the start, moved out by the thickness. A mesh

@@ -174,7 +174,7 @@ const XPBD_CHAIN_SUBSTEPS_PER_SECOND: f32 = 960.0;
 
 /// Automatic substeps a second at least with the chain solves for a cloth
 /// without pins whose every obstacle is a still ball or half-space (whose
-/// contacts the lanes hold, `lane_contacts.rs`): 12 a frame at 60 Hz.
+/// contacts the lanes hold, `lane_contacts`): 12 a frame at 60 Hz.
 /// Nothing there pulls the cloth against a pin or a moving surface: the
 /// contacts push it out where they stand, and the chains carry the rest.
 /// Measured, peak stretch over every frame of the drape (120 frames),

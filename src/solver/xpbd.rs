@@ -11,7 +11,7 @@
 //! started on (`collision/contact_planes.rs`) after the chains, each sweep
 //! and rounds of the stretch limit, with Coulomb friction at the end. When
 //! every obstacle is a still ball, capsule, half-space or cuboid, the lanes hold
-//! all the contacts (`lane_contacts.rs`): each particle is put back out
+//! all the contacts (`lane_contacts`): each particle is put back out
 //! after the chains and after the last sweep, where Coulomb friction
 //! undoes its slide (every second substep the springs are then kept off
 //! a cuboid's edges), then the stretch limit runs, putting each particle
@@ -85,7 +85,7 @@ pub(crate) struct XpbdScratch {
     /// The lane of each plane's particle.
     plane_lanes: Vec<u32>,
     /// Contacts with still balls, capsules, half-spaces and cuboids, held in the lanes
-    /// (`lane_contacts.rs`).
+    /// (`lane_contacts`).
     lane_contacts: LaneContacts,
     /// Velocities (m/s) in lane order, while the state stays in the lanes.
     velocity: [Vec<f32>; 3],
