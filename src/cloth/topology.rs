@@ -46,7 +46,7 @@ impl GridPiece {
 }
 
 /// The grid the small-steps solver lays a cloth's particles out on
-/// (`solver/grid_sweep.rs`): the cloth's own grid, or for cloths of one
+/// (`solver/grid_sweep`): the cloth's own grid, or for cloths of one
 /// grid shape joined into one, their grids stacked one under the other
 /// (piece `k`'s row `r` is row `k · piece_rows + r`), no spring crossing
 /// from a piece into the next.

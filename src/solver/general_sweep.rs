@@ -1,5 +1,5 @@
 //! The spring sweep of the small-steps solver for any cloth (a mesh, joined
-//! cloths, a torn sheet: whatever has no grid plan, `grid_sweep.rs`): one
+//! cloths, a torn sheet: whatever has no grid plan, `grid_sweep`): one
 //! Gauss–Seidel pass over the springs in their stored order, kind by kind
 //! and colour class by colour class (`Springs::from_list`).
 //!

@@ -1,7 +1,7 @@
 //! The springs of a torn grid cloth that the grid's runs leave out: the
 //! springs a split handed to a new particle (past the grid's), any that is
 //! not one of the grid's six families, and those at a tear's edge
-//! (`grid_sweep.rs` says why). The grid keeps the thousands of others in
+//! (`grid_sweep` says why). The grid keeps the thousands of others in
 //! its vector runs, where the springs it lost are lanes at rest length 0,
 //! which project nothing (`grid_sweep::project`). These few hundred are
 //! swept after the runs, in the springs' stored order (kind by kind, colour
@@ -17,7 +17,8 @@
 use crate::cloth::SpringKind;
 use crate::math::simd_available;
 
-use super::grid_sweep::{project, Compliance, KindInSweep, Lanes};
+use super::grid_sweep::lanes::Lanes;
+use super::grid_sweep::project::{project, Compliance, KindInSweep};
 
 /// Springs one vector step takes: the 8 lanes of an AVX2 register.
 const WIDTH: usize = 8;
