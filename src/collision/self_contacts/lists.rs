@@ -84,14 +84,3 @@ pub(super) fn headroom<T>(list: &mut Vec<T>) {
         list.reserve(list.len());
     }
 }
-
-/// Sorts a few pairs by particle (the pairs of one triangle: a handful).
-pub(super) fn insertion_sort(pairs: &mut [SelfPair]) {
-    for i in 1..pairs.len() {
-        let mut j = i;
-        while j > 0 && pairs[j - 1].particle > pairs[j].particle {
-            pairs.swap(j - 1, j);
-            j -= 1;
-        }
-    }
-}

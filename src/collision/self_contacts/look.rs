@@ -2,7 +2,7 @@
 
 use super::contacts::SelfContacts;
 use super::geometry::{barycentric, edge_lengths, is_positive, rim, rim_slack, side_at, sign};
-use super::lists::{headroom, insertion_sort, Candidates, EdgeList, PairList};
+use super::lists::{headroom, Candidates, EdgeList, PairList};
 use super::pair_lanes::LANES;
 use super::pairs::SelfPair;
 use crate::cloth::Topology;
@@ -512,5 +512,16 @@ impl SelfContacts {
         self.edge_pairs[first_fold..].sort_unstable_by_key(|e| (e.edge, e.other));
         self.edge_pairs.dedup_by_key(|e| (e.edge, e.other));
         headroom(&mut self.edge_pairs);
+    }
+}
+
+/// Sorts a few pairs by particle (the pairs of one triangle: a handful).
+fn insertion_sort(pairs: &mut [SelfPair]) {
+    for i in 1..pairs.len() {
+        let mut j = i;
+        while j > 0 && pairs[j - 1].particle > pairs[j].particle {
+            pairs.swap(j - 1, j);
+            j -= 1;
+        }
     }
 }
