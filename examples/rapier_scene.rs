@@ -40,7 +40,8 @@ fn main() -> Result<(), ClothError> {
 
     for frame in 1..=180 {
         coupling.step_world(&mut cloth, &mut world)?; // cloth first ...
-        world.step(); // ... then rapier integrates what the cloth did to its bodies
+        world.step(); // ... then rapier integrates what the cloth did to its bodies,
+        coupling.push_out_of_world(&mut cloth, &world); // and the cloth leaves any body rapier moved into it
         if frame % 45 == 0 {
             println!(
                 "t = {:.2} s  cloth centroid y = {:.3} m  paddle angle {:.2} rad  colliders near the cloth: {}",

@@ -14,7 +14,7 @@ use super::stretch_incidence::StretchIncidence;
 use super::tracks::ObstacleTracks;
 use crate::cloth::{Particles, SpringKind, Springs};
 use crate::context::StepContext;
-use crate::math::Vector;
+use crate::math::{Pose, Vector};
 use crate::parallel::{Disjoint, Team};
 
 /// Springs per block of the edge pass's first look (which springs come
@@ -277,6 +277,11 @@ impl CollisionStage {
     /// Momentum handed to each obstacle during the current step.
     pub fn impulses(&self) -> &[ObstacleImpulse] {
         self.tracks.impulses()
+    }
+
+    /// Each obstacle's pose at the end of the last substep (m).
+    pub fn poses(&self) -> &[Pose] {
+        self.tracks.poses()
     }
 
     /// Records momentum `j` (N·s) handed to obstacle `o` at `point` by a solver.

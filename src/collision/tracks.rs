@@ -441,6 +441,12 @@ impl ObstacleTracks {
         &self.impulses
     }
 
+    /// Each obstacle's pose at the current substep (m): at the end of a
+    /// step, where the step left it.
+    pub fn poses(&self) -> &[Pose] {
+        &self.poses
+    }
+
     /// Moves the obstacles to where they are `t` seconds into the step,
     /// before a substep of `h` seconds.
     pub fn advance_to(&mut self, obstacles: &[Obstacle], t: f32, h: f32) {

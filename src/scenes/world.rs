@@ -240,6 +240,13 @@ impl Scene {
                     )?
                     .step;
                 side.world.step();
+                // The cloth on the bodies where rapier left them, for the
+                // frame's picture and metrics.
+                side.coupling.push_out_of_bodies(
+                    &mut self.cloth,
+                    &mut self.solver,
+                    (&side.world.bodies, &side.world.colliders),
+                );
                 side.last_speeds.clear();
                 for (h, start) in side.bodies.iter().zip(before) {
                     if let Some(b) = side.world.bodies.get(*h) {

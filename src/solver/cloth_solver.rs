@@ -12,11 +12,13 @@ use super::stability::{
     chains_lengthen, joined_self_substeps, self_closing_substeps, stable_substeps,
 };
 use super::state::SolverState;
+use super::strain_limit::limit_stretch_weighted;
 use super::substeps::{self_collision_substeps, Substeps};
 use super::tearing::TearEvent;
 use super::workspace::Workspace;
 use crate::cloth::Cloth;
 use crate::collision::ObstacleImpulse;
+use crate::math::Pose;
 
 /// Steps a [`Cloth`] with the integrator and settings it holds.
 ///
@@ -94,6 +96,36 @@ impl ClothSolver {
     /// as the obstacles passed to [`ClothSolver::step`]).
     pub fn obstacle_impulses(&self) -> &[ObstacleImpulse] {
         self.workspace.collision.impulses()
+    }
+
+    /// Where the last step left each obstacle (same order as the obstacles
+    /// passed to [`ClothSolver::step`]; m and rad): a moving one on its
+    /// path, a dynamic body where the cloth's substeps moved it with its
+    /// velocity, gravity and the cloth's push. Empty before the first step;
+    /// stale while the cloth sleeps (its steps move nothing).
+    pub fn obstacle_end_poses(&self) -> &[Pose] {
+        self.workspace.collision.poses()
+    }
+
+    /// The material's stretch limit over the whole cloth, each particle
+    /// moved by its `weight` (1/kg; 0 holds it where it is), positions
+    /// only, in over-relaxed passes (at most 80): for a
+    /// stage between steps that placed particles on its own
+    /// ([`crate::rapier::RapierCoupling::push_out_of_bodies`]). Returns the
+    /// springs it shortened; none for a material without a limit or
+    /// weights of another length.
+    pub(crate) fn limit_stretch_between_steps(&mut self, cloth: &mut Cloth, weight: &[f32]) -> u32 {
+        let factor = cloth.material.stretch_limit_factor();
+        if !factor.is_finite() || weight.len() != cloth.particle_count() {
+            return 0;
+        }
+        let springs = &cloth.topology.springs;
+        limit_stretch_weighted(
+            &mut self.workspace.limit_scratch,
+            (springs, weight),
+            &mut cloth.particles.x,
+            factor,
+        )
     }
 
     /// Where the cloth tore during the last step: one event per stretch

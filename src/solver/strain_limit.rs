@@ -236,6 +236,20 @@ fn limit_stretch_relaxed(
     limit_passes(springs, weight, (x, v), factor, passes, Some(dirty))
 }
 
+/// [`limit_stretch_relaxed`] over every spring, each end moved by its
+/// `weight` (1/kg; 0 holds a particle where it is): a stage between steps
+/// that placed particles and lets the cloth around follow them.
+pub(crate) fn limit_stretch_weighted(
+    scratch: &mut LimitScratch,
+    (springs, weight): (&Springs, &[f32]),
+    x: &mut [Vector],
+    factor: f32,
+) -> u32 {
+    let dirty = &mut scratch.dirty;
+    dirty.begin(springs, x.len(), false);
+    limit_stretch_relaxed(springs, weight, (x, None), factor, (RELAXED_PASSES, dirty))
+}
+
 /// [`limit_stretch_relaxed`] weighted by the pins' `support` for the
 /// particles' inverse masses `inv_mass` (found again only when the cloth's
 /// mass `revision` changed): the limit after a substep of every integrator
