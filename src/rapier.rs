@@ -15,11 +15,13 @@
 //! the cloth's push one frame late, and that delay feeds energy into bouncing
 //! bodies.)
 //!
-//! Rapier's step may then move a dynamic body elsewhere than the cloth's
+//! Rapier's step may then put a dynamic body elsewhere than the cloth's
 //! substeps did: its own contacts (a crate landing on the floor, a ball
-//! stopped by a wall) change its motion within the frame, and the body
+//! stopped by a wall) change its motion within the frame, and its one step
+//! over the cloth's summed push differs from the substeps' path. The body
 //! moves into cloth the step left outside it (a cloth lying on a falling
-//! crate, slowed by the air, was 4.4 cm inside it at the landing). So
+//! crate, slowed by the air, was 4.4 cm inside it at the landing; flaps of
+//! a torn sheet falling on a ball that had just landed, 8 mm). So
 //! [`RapierCoupling::push_out_of_bodies`], right after rapier's step (or
 //! else first thing in the next cloth step), moves each particle such a
 //! body swept into back out to where the body met it. Use one coupling per
@@ -153,27 +155,19 @@ pub struct RapierCoupling {
     weight: Vec<f32>,
 }
 
-/// A dynamic body's collider the cloth met during a step: the pose (m, rad)
-/// the step's substeps left the collider in, and where rapier's step would
-/// put the body by its velocity (the cloth's push included) and gravity
-/// alone ([`RapierCoupling::push_out_of_bodies`]).
+/// A dynamic body's collider the cloth met during a step, with the pose (m,
+/// rad) the step's substeps left it in
+/// ([`RapierCoupling::push_out_of_bodies`]).
 #[derive(Debug, Clone)]
 struct MetBody {
     collider: ColliderHandle,
-    body: RigidBodyHandle,
     shape: SharedShape,
     left_at: Pose,
-    free_flight: Pose,
-    /// How far (m) rapier's own integration may leave it from `free_flight`.
-    slack: f32,
 }
 
-/// How far (m, beyond the slack of its integration) and how much (rad)
-/// rapier's step may move a dynamic body beyond its free flight before the
-/// cloth is pushed out of it: rounding stays under it, a contact of the
-/// body's own that moves it visibly does not. Below it the cloth's next
-/// step answers: the substeps' path of a body the cloth pushes and
-/// rapier's one step differ by millimetres.
+/// How far (m) and how much (rad) rapier's step may put a dynamic body from
+/// where the cloth's step left it before the cloth is looked at: rounding
+/// stays under it.
 const PUSH_OUT_BEYOND: f32 = 1.0e-4;
 
 /// Rounds at most of the stretch limit and the pushing bodies after a push
@@ -274,7 +268,7 @@ impl RapierCoupling {
         crate::error::non_negative("friction", self.friction)?;
         crate::error::non_negative("max obstacle speed", self.max_obstacle_speed)?;
         self.refuse_unsafe_integrator(solver, &sets)?;
-        self.push_out_of_bodies(cloth, solver, (sets.bodies, sets.colliders));
+        self.push_out_of_bodies(cloth, solver, sets.colliders);
         self.drive_attachments(cloth, dt, gravity, sets.bodies)?;
         self.gather(cloth, &sets);
         let step = solver.step(cloth, dt, &self.obstacles)?;
@@ -286,7 +280,7 @@ impl RapierCoupling {
         if self.two_way {
             report.impulse_to_bodies = self.push_bodies(cloth, solver, dt, sets.bodies);
         }
-        self.remember_met_bodies(solver, (dt, gravity), sets.bodies);
+        self.remember_met_bodies(solver);
         Ok(report)
     }
 
@@ -331,12 +325,12 @@ impl RapierCoupling {
 
     /// Pushes the cloth out of the dynamic bodies rapier's step moved into
     /// it (module docs): for each body the cloth met in its last step that
-    /// rapier moved beyond its free flight (its own contacts, joints or
-    /// forces), every particle inside it now and not where the step left
-    /// it goes back to where the body's difference swept into it, on its
-    /// surface. Positions only; the velocities meet the body in the next
-    /// step. A particle the body moved away from stays: cloth does not
-    /// stick.
+    /// rapier put elsewhere than that step left it, every particle inside
+    /// it now and not then goes back to where the body's difference swept
+    /// into it, on its surface, and the cloth around follows within its
+    /// stretch limit. Positions only; the velocities meet the body in the
+    /// next step. A particle the body moved away from stays: cloth does
+    /// not stick.
     ///
     /// Call it right after rapier's step, to draw the frame with the cloth
     /// outside the bodies; otherwise the next [`RapierCoupling::step`]
@@ -345,27 +339,28 @@ impl RapierCoupling {
         &mut self,
         cloth: &mut Cloth,
         solver: &mut ClothSolver,
-        (bodies, colliders): (&RigidBodySet, &ColliderSet),
+        colliders: &ColliderSet,
     ) {
         let particles = &mut cloth.particles;
         let mut any = false;
         self.pushing.clear();
         for c in &self.met {
-            let (Some(collider), Some(body)) = (colliders.get(c.collider), bodies.get(c.body))
-            else {
+            let Some(collider) = colliders.get(c.collider) else {
                 continue;
             };
-            // Only where rapier's step did more than carry the body on by
-            // its velocity and gravity.
-            let beyond = *body.position() * c.free_flight.inverse();
-            let turned_beyond = beyond.rotation.to_scaled_axis().length();
-            if !(beyond.translation.length() > c.slack + PUSH_OUT_BEYOND
-                || turned_beyond > PUSH_OUT_BEYOND)
-            {
-                continue;
-            }
             let now = *collider.position();
-            if !now.translation.is_finite() || !now.rotation.is_finite() {
+            // Where rapier's step put the body against where the cloth's
+            // left it: its own contacts, joints or forces, or its one step
+            // over a push the substeps spread through the frame.
+            let by = now * c.left_at.inverse();
+            let (moved, turned) = (
+                by.translation.length(),
+                by.rotation.to_scaled_axis().length(),
+            );
+            if !(moved > PUSH_OUT_BEYOND || turned > PUSH_OUT_BEYOND)
+                || !moved.is_finite()
+                || !turned.is_finite()
+            {
                 continue;
             }
             if !any {
@@ -453,23 +448,13 @@ impl RapierCoupling {
     /// [`RapierCoupling::push_out_of_bodies`] for a [`Simulation`] in a
     /// [`PhysicsWorld`]: call it right after the world's step.
     pub fn push_out_of_world(&mut self, sim: &mut Simulation, world: &PhysicsWorld) {
-        self.push_out_of_bodies(
-            &mut sim.cloth,
-            &mut sim.solver,
-            (&world.bodies, &world.colliders),
-        );
+        self.push_out_of_bodies(&mut sim.cloth, &mut sim.solver, &world.colliders);
     }
 
-    /// Remembers the dynamic bodies' colliders the step's cloth met: where
-    /// the step left them, and where rapier's step would put their bodies
-    /// without contacts of their own (none while the cloth sleeps: its step
-    /// moved nothing). After the cloth's push is handed to the bodies.
-    fn remember_met_bodies(
-        &mut self,
-        solver: &ClothSolver,
-        (dt, gravity): (f32, Vector),
-        bodies: &RigidBodySet,
-    ) {
+    /// Remembers the dynamic bodies' colliders the step's cloth met and
+    /// where the step left them (none while the cloth sleeps: its step
+    /// moved nothing).
+    fn remember_met_bodies(&mut self, solver: &ClothSolver) {
         self.met.clear();
         let ends = solver.obstacle_end_poses();
         if solver.is_asleep() || ends.len() != self.obstacles.len() {
@@ -477,24 +462,15 @@ impl RapierCoupling {
         }
         // Every dynamic body the cloth met, pushing it or not: a cloth
         // lying on a falling crate falls with it and pushes it nowhere.
-        for ((obstacle, &(collider, parent)), end) in
-            self.obstacles.iter().zip(&self.handles).zip(ends)
+        for ((obstacle, &(collider, _)), end) in self.obstacles.iter().zip(&self.handles).zip(ends)
         {
-            if obstacle.body.is_none() {
-                continue;
+            if obstacle.body.is_some() {
+                self.met.push(MetBody {
+                    collider,
+                    shape: obstacle.shape.clone(),
+                    left_at: *end,
+                });
             }
-            let Some((body, rb)) = parent.and_then(|h| Some((h, bodies.get(h)?))) else {
-                continue;
-            };
-            let (free_flight, slack) = free_flight(rb, dt, gravity);
-            self.met.push(MetBody {
-                collider,
-                body,
-                shape: obstacle.shape.clone(),
-                left_at: *end,
-                free_flight,
-                slack,
-            });
         }
     }
 
@@ -698,26 +674,6 @@ fn predicted_pose(body: &RigidBody, dt: f32) -> Pose {
         RigidBodyType::Fixed => *body.position(),
         _ => body.predict_position_using_velocity(dt),
     }
-}
-
-/// Where rapier's step puts a dynamic body with no contact, joint or force
-/// but gravity, give or take the returned slack (m): moved by its velocity
-/// about its centre of mass, damped, and by gravity over `dt`. Gravity
-/// moves it by between a half and the whole of `g dt²` with the solver's
-/// substeps (a half for many, the whole for one; rapier's default 4 give
-/// 0.625): the middle, with a quarter of it as slack.
-fn free_flight(body: &RigidBody, dt: f32, gravity: Vector) -> (Pose, f32) {
-    let fall = gravity * (body.gravity_scale() * dt);
-    let mut vels = *body.vels();
-    vels.linvel += fall * 0.75;
-    vels.linvel *= 1.0 / (1.0 + dt * body.linear_damping());
-    vels.angvel *= 1.0 / (1.0 + dt * body.angular_damping());
-    let pose = vels.integrate(
-        dt,
-        body.position(),
-        &body.mass_properties().local_mprops.local_com,
-    );
-    (pose, 0.25 * fall.length() * dt)
 }
 
 fn stale_body(handle: RigidBodyHandle) -> ClothError {

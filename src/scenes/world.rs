@@ -245,7 +245,7 @@ impl Scene {
                 side.coupling.push_out_of_bodies(
                     &mut self.cloth,
                     &mut self.solver,
-                    (&side.world.bodies, &side.world.colliders),
+                    &side.world.colliders,
                 );
                 side.last_speeds.clear();
                 for (h, start) in side.bodies.iter().zip(before) {
