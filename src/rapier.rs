@@ -61,7 +61,8 @@ use rapier3d::prelude::{
     QueryFilter, RigidBody, RigidBodyHandle, RigidBodySet, RigidBodyType, SharedShape,
 };
 
-use crate::cloth::Cloth;
+use crate::cloth::{Cloth, SpringKind, Springs};
+use crate::collision::LIMIT_SLACK;
 use crate::collision::{DynamicBody, Obstacle};
 use crate::error::ClothError;
 use crate::math::{Pose, Vector};
@@ -153,6 +154,9 @@ pub struct RapierCoupling {
     /// Per particle: its weight in the stretch limit after a push, 0 for
     /// one on a pushing body's surface (scratch).
     weight: Vec<f32>,
+    /// The particles' positions and previous positions before a push, and
+    /// the cloth's largest stretch then, to go back to (scratch).
+    before: (Vec<Vector>, Vec<Vector>, f32),
 }
 
 /// A dynamic body's collider the cloth met during a step, with the pose (m,
@@ -197,6 +201,7 @@ impl RapierCoupling {
             moved: Vec::new(),
             pushing: Vec::new(),
             weight: Vec::new(),
+            before: (Vec::new(), Vec::new(), 0.0),
         }
     }
 
@@ -328,9 +333,13 @@ impl RapierCoupling {
     /// rapier put elsewhere than that step left it, every particle inside
     /// it now and not then goes back to where the body's difference swept
     /// into it, on its surface, and the cloth around follows within its
-    /// stretch limit. Positions only; the velocities meet the body in the
-    /// next step. A particle the body moved away from stays: cloth does
-    /// not stick.
+    /// stretch limit. Where it cannot (the cloth held by pins beyond the
+    /// pushed particles, or pressed under a stack of bodies), and the push
+    /// would leave the cloth stretched past its limit and past its stretch
+    /// before, every particle goes back to where it was: the next step
+    /// pushes the body instead. Positions only; the velocities meet the
+    /// body in the next step. A particle the body moved away from stays:
+    /// cloth does not stick.
     ///
     /// Call it right after rapier's step, to draw the frame with the cloth
     /// outside the bodies; otherwise the next [`RapierCoupling::step`]
@@ -341,6 +350,7 @@ impl RapierCoupling {
         solver: &mut ClothSolver,
         colliders: &ColliderSet,
     ) {
+        let springs = &cloth.topology.springs;
         let particles = &mut cloth.particles;
         let mut any = false;
         self.pushing.clear();
@@ -389,6 +399,14 @@ impl RapierCoupling {
                 };
                 let local = ray.point_at(toi);
                 let to = now.transform_point(local);
+                if self.pushing.is_empty() {
+                    let (x, x_prev, stretch) = &mut self.before;
+                    x.clear();
+                    x.extend_from_slice(&particles.x);
+                    x_prev.clear();
+                    x_prev.extend_from_slice(&particles.x_prev);
+                    *stretch = max_stretch(springs, &particles.x);
+                }
                 particles.x_prev[i] += to - p;
                 particles.x[i] = to;
                 self.moved[i] = true;
@@ -442,6 +460,18 @@ impl RapierCoupling {
             if shortened == 0 && pushed == 0 {
                 break;
             }
+        }
+        // No worse than before: where the cloth cannot follow within its
+        // limit (held by pins beyond the pushed particles, as a hammock's
+        // side under a box rapier shoved into it at 20 Hz: 17% stretched),
+        // the push goes back, and the next step pushes the body instead.
+        let limit = cloth.material.stretch_limit_factor() - 1.0;
+        let stretch = max_stretch(&cloth.topology.springs, &cloth.particles.x);
+        let (x, x_prev, was) = &self.before;
+        let same = x.len() == cloth.particles.x.len() && x_prev.len() == x.len();
+        if same && stretch > was.max(limit * (1.0 + LIMIT_SLACK) + LIMIT_SLACK) {
+            cloth.particles.x.copy_from_slice(x);
+            cloth.particles.x_prev.copy_from_slice(x_prev);
         }
     }
 
@@ -674,6 +704,18 @@ fn predicted_pose(body: &RigidBody, dt: f32) -> Pose {
         RigidBodyType::Fixed => *body.position(),
         _ => body.predict_position_using_velocity(dt),
     }
+}
+
+/// The largest strain of the stretch `springs` at positions `x`.
+fn max_stretch(springs: &Springs, x: &[Vector]) -> f32 {
+    springs
+        .range(SpringKind::Stretch)
+        .filter_map(|s| springs.get(s))
+        .filter_map(|s| {
+            let (a, b) = (x.get(s.a as usize)?, x.get(s.b as usize)?);
+            Some((*a - *b).length() / s.rest_length - 1.0)
+        })
+        .fold(0.0, f32::max)
 }
 
 fn stale_body(handle: RigidBodyHandle) -> ClothError {
