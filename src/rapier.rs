@@ -24,7 +24,8 @@
 //! a torn sheet falling on a ball that had just landed, 8 mm). So
 //! [`RapierCoupling::push_out_of_bodies`], right after rapier's step (or
 //! else first thing in the next cloth step), moves each particle such a
-//! body swept into back out to where the body met it. Use one coupling per
+//! body swept into back out, to its place on the body as the cloth's step
+//! left it. Use one coupling per
 //! cloth: it remembers where the last step left the bodies its cloth met.
 //!
 //! ```
@@ -55,7 +56,6 @@
 
 use glam::Mat3;
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
-use parry3d::query::Ray;
 use rapier3d::prelude::{
     BroadPhaseBvh, ColliderHandle, ColliderSet, InteractionGroups, NarrowPhase, PhysicsWorld,
     QueryFilter, RigidBody, RigidBodyHandle, RigidBodySet, RigidBodyType, SharedShape,
@@ -331,9 +331,10 @@ impl RapierCoupling {
     /// Pushes the cloth out of the dynamic bodies rapier's step moved into
     /// it (module docs): for each body the cloth met in its last step that
     /// rapier put elsewhere than that step left it, every particle inside
-    /// it now and not then goes back to where the body's difference swept
-    /// into it, on its surface, and the cloth around follows within its
-    /// stretch limit. Where it cannot (the cloth held by pins beyond the
+    /// it now and not then goes back to its place on the body as the step
+    /// left it (as far outside it, on the same side: swept layers keep
+    /// their order), and the cloth around follows within its stretch
+    /// limit. Where it cannot (the cloth held by pins beyond the
     /// pushed particles, or pressed under a stack of bodies), and the push
     /// would leave the cloth stretched past its limit and past its stretch
     /// before, every particle goes back to where it was: the next step
@@ -385,7 +386,7 @@ impl RapierCoupling {
                     continue;
                 }
                 // Inside the body now, and not as the step left it: the
-                // body's difference swept through the particle.
+                // body's difference swept into the particle.
                 let (then, inside) = (
                     c.left_at.inverse_transform_point(p),
                     now.inverse_transform_point(p),
@@ -393,12 +394,10 @@ impl RapierCoupling {
                 if !c.shape.contains_local_point(inside) || c.shape.contains_local_point(then) {
                     continue;
                 }
-                let ray = Ray::new(then, inside - then);
-                let Some(toi) = c.shape.cast_local_ray(&ray, 1.0, true) else {
-                    continue;
-                };
-                let local = ray.point_at(toi);
-                let to = now.transform_point(local);
+                // Back to its place on the body as the step left it: as
+                // far outside it, on the same side, so layers of cloth
+                // the body swept keep their order.
+                let to = now.transform_point(then);
                 if self.pushing.is_empty() {
                     let (x, x_prev, stretch) = &mut self.before;
                     x.clear();
