@@ -61,7 +61,7 @@ use rapier3d::prelude::{
     QueryFilter, RigidBody, RigidBodyHandle, RigidBodySet, RigidBodyType, SharedShape,
 };
 
-use crate::cloth::{Cloth, SpringKind, Springs};
+use crate::cloth::{Cloth, SpringKind};
 use crate::collision::LIMIT_SLACK;
 use crate::collision::{DynamicBody, Obstacle};
 use crate::error::ClothError;
@@ -146,17 +146,16 @@ pub struct RapierCoupling {
     /// The dynamic bodies' colliders the last step's cloth met, with where
     /// that step left them.
     met: Vec<MetBody>,
-    /// Per particle: already pushed out of a body this time (scratch).
-    moved: Vec<bool>,
     /// The bodies that pushed particles out this time, where they are
     /// (scratch).
     pushing: Vec<(SharedShape, Pose)>,
-    /// Per particle: its weight in the stretch limit after a push, 0 for
-    /// one on a pushing body's surface (scratch).
+    /// Per particle: its inverse mass, or 0 once pushed out of a body
+    /// (held in the stretch limit that follows, and not pushed again) or
+    /// pinned (scratch).
     weight: Vec<f32>,
-    /// The particles' positions and previous positions before a push, and
-    /// the cloth's largest stretch then, to go back to (scratch).
-    before: (Vec<Vector>, Vec<Vector>, f32),
+    /// The particles' positions and previous positions before a push, to
+    /// go back to (scratch).
+    before: (Vec<Vector>, Vec<Vector>),
 }
 
 /// A dynamic body's collider the cloth met during a step, with the pose (m,
@@ -198,10 +197,9 @@ impl RapierCoupling {
             obstacles: Vec::new(),
             handles: Vec::new(),
             met: Vec::new(),
-            moved: Vec::new(),
             pushing: Vec::new(),
             weight: Vec::new(),
-            before: (Vec::new(), Vec::new(), 0.0),
+            before: (Vec::new(), Vec::new()),
         }
     }
 
@@ -351,7 +349,6 @@ impl RapierCoupling {
         solver: &mut ClothSolver,
         colliders: &ColliderSet,
     ) {
-        let springs = &cloth.topology.springs;
         let particles = &mut cloth.particles;
         let mut any = false;
         self.pushing.clear();
@@ -375,14 +372,14 @@ impl RapierCoupling {
                 continue;
             }
             if !any {
-                self.moved.clear();
-                self.moved.resize(particles.x.len(), false);
+                self.weight.clear();
+                self.weight.extend_from_slice(&particles.inv_mass);
                 any = true;
             }
             let near = c.shape.compute_aabb(&now);
             for i in 0..particles.x.len() {
                 let p = particles.x[i];
-                if self.moved[i] || particles.inv_mass[i] == 0.0 || !near.contains_local_point(p) {
+                if self.weight[i] == 0.0 || !near.contains_local_point(p) {
                     continue;
                 }
                 // Inside the body now, and not as the step left it: the
@@ -399,16 +396,15 @@ impl RapierCoupling {
                 // the body swept keep their order.
                 let to = now.transform_point(then);
                 if self.pushing.is_empty() {
-                    let (x, x_prev, stretch) = &mut self.before;
+                    let (x, x_prev) = &mut self.before;
                     x.clear();
                     x.extend_from_slice(&particles.x);
                     x_prev.clear();
                     x_prev.extend_from_slice(&particles.x_prev);
-                    *stretch = max_stretch(springs, &particles.x);
                 }
                 particles.x_prev[i] += to - p;
                 particles.x[i] = to;
-                self.moved[i] = true;
+                self.weight[i] = 0.0;
                 if self.pushing.last().is_none_or(|(_, at)| *at != now) {
                     self.pushing.push((c.shape.clone(), now));
                 }
@@ -425,17 +421,8 @@ impl RapierCoupling {
         // stopped, its top pushed up 7 cm and its sides not, was 97%
         // stretched at the crate's edges; 11.6% when the limit could pull
         // the pushed particles back in, to be pushed out again).
-        // Held where pushed: the limit moves the cloth around towards them
-        // rather than them back in.
-        self.weight.clear();
-        self.weight.extend(
-            cloth
-                .particles
-                .inv_mass
-                .iter()
-                .zip(&self.moved)
-                .map(|(&w, &pushed)| if pushed { 0.0 } else { w }),
-        );
+        // Held where pushed (weight 0): the limit moves the cloth around
+        // towards them rather than them back in.
         for _ in 0..PUSH_OUT_ROUNDS {
             let shortened = solver.limit_stretch_between_steps(cloth, &self.weight);
             let particles = &mut cloth.particles;
@@ -465,8 +452,9 @@ impl RapierCoupling {
         // side under a box rapier shoved into it at 20 Hz: 17% stretched),
         // the push goes back, and the next step pushes the body instead.
         let limit = cloth.material.stretch_limit_factor() - 1.0;
-        let stretch = max_stretch(&cloth.topology.springs, &cloth.particles.x);
-        let (x, x_prev, was) = &self.before;
+        let (x, x_prev) = &self.before;
+        let stretch = cloth.max_strain(SpringKind::Stretch);
+        let was = cloth.max_strain_at(SpringKind::Stretch, x);
         let same = x.len() == cloth.particles.x.len() && x_prev.len() == x.len();
         if same && stretch > was.max(limit * (1.0 + LIMIT_SLACK) + LIMIT_SLACK) {
             cloth.particles.x.copy_from_slice(x);
@@ -703,18 +691,6 @@ fn predicted_pose(body: &RigidBody, dt: f32) -> Pose {
         RigidBodyType::Fixed => *body.position(),
         _ => body.predict_position_using_velocity(dt),
     }
-}
-
-/// The largest strain of the stretch `springs` at positions `x`.
-fn max_stretch(springs: &Springs, x: &[Vector]) -> f32 {
-    springs
-        .range(SpringKind::Stretch)
-        .filter_map(|s| springs.get(s))
-        .filter_map(|s| {
-            let (a, b) = (x.get(s.a as usize)?, x.get(s.b as usize)?);
-            Some((*a - *b).length() / s.rest_length - 1.0)
-        })
-        .fold(0.0, f32::max)
 }
 
 fn stale_body(handle: RigidBodyHandle) -> ClothError {

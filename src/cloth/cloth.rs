@@ -404,8 +404,16 @@ impl Cloth {
 
     /// The largest strain over the springs of one kind (0 when there is none).
     pub fn max_strain(&self, kind: SpringKind) -> f32 {
+        self.max_strain_at(kind, &self.particles.x)
+    }
+
+    /// [`Self::max_strain`] with the particles at `x` (m) instead of where
+    /// they are; infinite for positions of another count.
+    pub(crate) fn max_strain_at(&self, kind: SpringKind, x: &[Vector]) -> f32 {
+        if x.len() != self.particles.x.len() {
+            return f32::INFINITY;
+        }
         let (a, b, rest) = self.springs_of(kind);
-        let x = &self.particles.x;
         // Eight running maxima (one is a chain of dependent `max`es; the
         // largest is the same value whichever way they are grouped, and
         // NaN is passed over either way). Once a step, by the solver's
