@@ -240,8 +240,8 @@ impl Scene {
                     )?
                     .step;
                 side.world.step();
-                // The cloth on the bodies where rapier left them, for the
-                // frame's picture and metrics.
+                // The cloth out of the bodies rapier's step moved into it,
+                // for the frame's picture and metrics.
                 side.coupling.push_out_of_bodies(
                     &mut self.cloth,
                     &mut self.solver,
