@@ -185,10 +185,29 @@ impl PairLanes {
                     _mm256_add_ps(m(reach, edge), splat(tol)),
                 )
             };
-            let outside = or(lt(u, slack(d33)), or(lt(vb, slack(d22)), lt(w, slack(d11))));
+            let (s1, s2, s3) = (slack(d11), slack(d22), slack(d33));
+            let outside = or(lt(u, s3), or(lt(vb, s2), lt(w, s1)));
+            // In the rim, at or past the thinned thickness (`rim_taper`),
+            // the barycentrics a hair further in and the slack a hair
+            // wider: a pair the pass leaves at the thinned thickness is
+            // not taken again every substep.
+            let zero = _mm256_setzero_ps();
+            let share = |bary: __m256, slack: __m256| {
+                let r = _mm256_div_ps(_mm256_min_ps(_mm256_add_ps(bary, splat(tol)), zero), slack);
+                m(r, r)
+            };
+            let out2 = _mm256_add_ps(share(u, s3), _mm256_add_ps(share(vb, s2), share(w, s1)));
+            let kept = _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(splat(1.0), out2), zero));
+            let thin = ge(
+                dist,
+                _mm256_add_ps(
+                    m(kept, splat(thickness * (1.0 + tol))),
+                    splat(thickness * tol),
+                ),
+            );
             // A degenerate triangle: left to the pass itself.
             let flat = _mm256_cmp_ps::<_CMP_NGT_UQ>(denom, _mm256_setzero_ps());
-            let idle = or(apart, _mm256_andnot_ps(flat, or(far, outside)));
+            let idle = or(apart, _mm256_andnot_ps(flat, or(or(far, thin), outside)));
             // Lanes past the last pair are idle.
             let lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
             let left = _mm256_set1_epi32((self.len - k).min(LANES) as i32);

@@ -29,7 +29,15 @@ pub(super) struct EdgePair {
     /// +1 when `edge` lay on the side `(b − a) × (q − p)` points to from
     /// the other edge a substep before the look, −1 on the other.
     pub(super) side: f32,
+    /// For two sharp folds' edges, the two triangles of `edge` and the
+    /// two of `other`: the pass keeps the layers apart by less where a
+    /// fold is less sharp now ([`fold_share`](super::edge_pairs::fold_share));
+    /// [`NO_FOLDS`] for a border edge's pair.
+    pub(super) folds: [[u32; 2]; 2],
 }
+
+/// [`EdgePair::folds`] of a border edge's pair.
+pub(super) const NO_FOLDS: [[u32; 2]; 2] = [[u32::MAX; 2]; 2];
 
 /// Where self-collision last looked for pairs: solver state, since when it
 /// looks next depends on it.

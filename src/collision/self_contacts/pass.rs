@@ -1,10 +1,13 @@
 //! A substep's pass over the pairs, and the triangle it works with.
 
 use super::contacts::SelfContacts;
-use super::geometry::{barycentric, clamped, closest, edge_lengths, is_positive, rim, rim_slack};
+use super::edge_pairs::fold_share;
+use super::geometry::{
+    barycentric, clamped, closest, edge_lengths, is_positive, rim, rim_slack, rim_taper,
+};
 use super::lists::PartPairs;
 use super::pair_lanes::LANES;
-use super::pairs::SelfPair;
+use super::pairs::{SelfPair, NO_FOLDS};
 use super::params::SelfContactParams;
 use super::pass_plane::PARALLEL_MIN_PAIRS;
 use super::points::Points;
@@ -56,6 +59,16 @@ impl SelfContacts {
             let gap = (a + (b - a) * s - p - (q - p) * t).dot(n);
             // As for faces: apart, or turned away since the look.
             if gap >= thickness || gap < -(thickness + self.margin) {
+                continue;
+            }
+            // Two folds' edges: as far apart as the lesser fold is sharp.
+            let thickness = if pair.folds == NO_FOLDS {
+                thickness
+            } else {
+                let share = |faces| fold_share(faces, &topology.triangles, x);
+                thickness * share(pair.folds[0]).min(share(pair.folds[1]))
+            };
+            if gap >= thickness {
                 continue;
             }
             let shares = [1.0 - s, s, 1.0 - t, t];
@@ -203,6 +216,11 @@ impl SelfContacts {
         }
         let bary = barycentric(xp - n * d - a, e1, e2);
         if (0..3).any(|k| bary[k] < -slack[k]) {
+            return 0;
+        }
+        // Out in the rim the layer thins to nothing at its outer edge.
+        let thickness = thickness * rim_taper(bary, slack);
+        if d >= thickness {
             return 0;
         }
         // Just outside the rim, the nearest point of the edge takes it.

@@ -1,7 +1,8 @@
 //! Self-collision's unit tests: the looks, the pass and their bits.
 
 use super::contacts::{motion_box, SelfContacts};
-use super::geometry::closest;
+use super::edge_pairs::{fold_share, FULL_FOLD, SHARP_FOLD};
+use super::geometry::{closest, rim_taper};
 use super::lists::PartPairs;
 use super::look::Look;
 use super::pairs::SelfPair;
@@ -568,4 +569,68 @@ fn the_pass_by_eights_gives_the_bits_of_one_pair_at_a_time() {
     let (batched, one) = (run(false), run(true));
     assert!(one.0[0] > 50, "only {:?} pairs touching", one.0);
     assert_eq!(batched, one);
+}
+
+/// Over a triangle a particle keeps the whole thickness; out in the rim
+/// the share falls as a quarter circle, to none at the rim's edge (over
+/// one edge or two), with no step anywhere on the way out.
+#[test]
+fn the_rim_thins_the_layer_to_nothing_at_its_edge() {
+    let slack = [0.2, 0.3, 0.25];
+    assert_eq!(rim_taper([0.2, 0.3, 0.5], slack), 1.0);
+    assert_eq!(rim_taper([0.0, 0.5, 0.5], slack), 1.0);
+    // Half-way out over the first edge: √(1 − ¼).
+    let half = rim_taper([-0.1, 0.6, 0.5], slack);
+    assert!((half - 0.75f32.sqrt()).abs() < 1e-6, "{half}");
+    assert_eq!(rim_taper([-0.2, 0.7, 0.5], slack), 0.0);
+    // Out over two edges, at 0.6 of the rim over each: √(1 − 0.72).
+    let corner = rim_taper([-0.12, -0.18, 1.3], slack);
+    assert!((corner - 0.28f32.sqrt()).abs() < 1e-5, "{corner}");
+    // Walking out over the first edge in small steps: falling, never by
+    // more than a step's worth near the triangle.
+    let mut last = 1.0;
+    for k in 0..=100 {
+        let u = -0.2 * k as f32 / 100.0;
+        let share = rim_taper([u, 0.5 - u, 0.5], slack);
+        assert!(
+            share <= last && (k > 90 || last - share < 0.05),
+            "{k}: {share}"
+        );
+        last = share;
+    }
+    assert_eq!(last, 0.0);
+}
+
+/// Two triangles folded about their common edge by `angle` (radians)
+/// between their normals.
+fn folded_pair(angle: f32) -> (Vec<[u32; 3]>, Vec<Vector>) {
+    let (s, c) = angle.sin_cos();
+    let x = vec![
+        Vector::new(0.0, 0.0, 0.0),
+        Vector::new(0.0, 0.0, 1.0),
+        Vector::new(-1.0, 0.0, 0.5),
+        // The second triangle's far corner turned about the edge (z).
+        Vector::new(c, s, 0.5),
+    ];
+    (vec![[0, 1, 2], [1, 0, 3]], x)
+}
+
+/// A fold's edge keeps none of the thickness up to the look's threshold,
+/// all of it from the full fold on, and grows in between.
+#[test]
+fn a_fold_keeps_more_of_the_thickness_the_sharper_it_is() {
+    let share = |angle: f32| {
+        let (triangles, x) = folded_pair(angle);
+        fold_share([0, 1], &triangles, &x)
+    };
+    assert_eq!(share(0.0), 0.0);
+    assert_eq!(share(SHARP_FOLD * 0.99), 0.0);
+    let middle = share(0.5 * (SHARP_FOLD + FULL_FOLD));
+    assert!(middle > 0.4 && middle < 0.6, "{middle}");
+    assert_eq!(share(FULL_FOLD * 1.01), 1.0);
+    assert_eq!(share(2.0), 1.0);
+    // A triangle of no area counts as sharp, as the look counts it.
+    let (triangles, mut x) = folded_pair(0.0);
+    x[2] = x[0];
+    assert_eq!(fold_share([0, 1], &triangles, &x), 1.0);
 }
