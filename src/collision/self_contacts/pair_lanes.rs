@@ -81,8 +81,10 @@ impl PairLanes {
     /// `x`, for layers `(thickness, margin)` (m), a bit each (lane `l` bit
     /// `l`): those not idle by
     /// [`SelfContacts::pair_pass`](super::SelfContacts::pair_pass)'s tests up
-    /// to the barycentrics, each made a hair looser; every pair's bit when the
-    /// lanes are not usable. None past the last pair.
+    /// to the barycentrics and the rim's thinning
+    /// ([`rim_taper`](super::geometry::rim_taper)), each made a hair looser;
+    /// every pair's bit when the lanes are not usable. None past the last
+    /// pair.
     pub(super) fn busy(&self, k: usize, x: &Points, layers: (f32, f32)) -> u32 {
         #[cfg(target_arch = "x86_64")]
         if self.usable(self.len, x.len) && k < self.len {
