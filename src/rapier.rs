@@ -350,7 +350,7 @@ impl RapierCoupling {
         colliders: &ColliderSet,
     ) {
         let particles = &mut cloth.particles;
-        let mut any = false;
+        let (mut any, mut saved) = (false, false);
         self.pushing.clear();
         for c in &self.met {
             let Some(collider) = colliders.get(c.collider) else {
@@ -377,6 +377,7 @@ impl RapierCoupling {
                 any = true;
             }
             let near = c.shape.compute_aabb(&now);
+            let mut pushes = false;
             for i in 0..particles.x.len() {
                 let p = particles.x[i];
                 if self.weight[i] == 0.0 || !near.contains_local_point(p) {
@@ -395,19 +396,21 @@ impl RapierCoupling {
                 // far outside it, on the same side, so layers of cloth
                 // the body swept keep their order.
                 let to = now.transform_point(then);
-                if self.pushing.is_empty() {
+                if !saved {
                     let (x, x_prev) = &mut self.before;
                     x.clear();
                     x.extend_from_slice(&particles.x);
                     x_prev.clear();
                     x_prev.extend_from_slice(&particles.x_prev);
+                    saved = true;
                 }
                 particles.x_prev[i] += to - p;
                 particles.x[i] = to;
                 self.weight[i] = 0.0;
-                if self.pushing.last().is_none_or(|(_, at)| *at != now) {
-                    self.pushing.push((c.shape.clone(), now));
-                }
+                pushes = true;
+            }
+            if pushes {
+                self.pushing.push((c.shape.clone(), now));
             }
         }
         self.met.clear();

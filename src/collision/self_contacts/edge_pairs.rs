@@ -197,20 +197,28 @@ impl Look<'_> {
         if other.iter().any(|p| edge.contains(p) || sheet.holds(*p)) {
             return;
         }
+        let x = self.x;
+        let (first, second) = if edge <= other {
+            (edge, other)
+        } else {
+            (other, edge)
+        };
+        let [a, b] = first.map(|i| x[i as usize]);
+        let [p, q] = second.map(|i| x[i as usize]);
+        let Some(pair) = self.within_reach((first, a, b - a), (second, p, q - p)) else {
+            return;
+        };
+        // The other fold's triangles, for the pairs within reach alone.
         let (inner, inner_faces) = neighbours.inner_edges();
         let Some(other_faces) = inner.binary_search(&other).ok().map(|k| inner_faces[k]) else {
             return;
         };
-        let x = self.x;
-        let ((first, second), folds) = if edge <= other {
-            ((edge, other), [faces, other_faces])
+        let folds = if edge <= other {
+            [faces, other_faces]
         } else {
-            ((other, edge), [other_faces, faces])
+            [other_faces, faces]
         };
-        let [a, b] = first.map(|i| x[i as usize]);
-        let [p, q] = second.map(|i| x[i as usize]);
-        let pair = self.within_reach((first, a, b - a), (second, p, q - p));
-        out.extend(pair.map(|pair| EdgePair { folds, ..pair }));
+        out.push(EdgePair { folds, ..pair });
     }
 
     /// Which of the edges from `xe` to the particles `ends` (at most
