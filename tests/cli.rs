@@ -406,6 +406,43 @@ fn bench_runs_each_row_on_each_thread_count() {
 }
 
 #[test]
+fn bench_on_two_threads_says_what_the_machines_two_threads_gave() {
+    let args = [
+        "bench",
+        "--n",
+        "8",
+        "--integrator",
+        "xpbd",
+        "--warmup",
+        "1",
+        "--frames",
+        "1",
+        "--no-rapier",
+        "--threads",
+        "1",
+        "--threads",
+        "2",
+    ];
+    let out = cloth3d_ok(&args);
+    let line = out
+        .lines()
+        .find(|l| l.starts_with("host: two threads did "))
+        .unwrap_or_else(|| panic!("no host line in:\n{out}"));
+    let gain: f64 = line["host: two threads did ".len()..]
+        .split('x')
+        .next()
+        .and_then(|g| g.parse().ok())
+        .unwrap_or_else(|| panic!("no gain in {line:?}"));
+    // Two threads of the same work: about one thread's throughput (a
+    // shared core) to two (two free ones), and less while other tests
+    // load the machine; never nothing, never more than a few.
+    assert!(gain.is_finite() && (0.2..=3.0).contains(&gain), "{line}");
+    // On one thread alone there is nothing to say.
+    let alone = cloth3d_ok(&args[..args.len() - 2]);
+    assert!(!alone.contains("host:"), "{alone}");
+}
+
+#[test]
 fn export_scene_writes_the_solver_flags_and_run_uses_them() {
     let dir = std::env::temp_dir().join(format!("cloth3d-export-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

@@ -154,6 +154,42 @@ pub fn bench_cloth3d(
     })
 }
 
+/// How much more independent arithmetic two threads of rayon's current
+/// pool get through than one (the first of them alone): 2 on two free
+/// cores, about 1 where the two share one (hyperthreads of one core, or a
+/// virtual machine whose second CPU is busy elsewhere). The bench prints it
+/// after its rows, so that a two-thread figure can be read against what the
+/// machine gave at the time. Each half is 8 independent chains of
+/// multiply-adds (no memory traffic: the FPU's throughput), the median of
+/// five tries of about 10 ms; 1 without the `parallel` feature.
+pub fn two_thread_gain() -> f64 {
+    /// Multiply-adds a try runs in each half.
+    const STEPS: u64 = 4_000_000;
+    fn half(seed: f64) -> f64 {
+        let mut acc = [seed; 8];
+        for _ in 0..STEPS {
+            for (k, a) in acc.iter_mut().enumerate() {
+                *a = *a * 0.999_999_9 + 1.0e-7 * k as f64;
+            }
+        }
+        std::hint::black_box(acc.iter().sum())
+    }
+    let mut gains = Vec::new();
+    for _ in 0..5 {
+        let start = Instant::now();
+        half(1.0);
+        let one = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        #[cfg(feature = "parallel")]
+        rayon::join(|| half(1.0), || half(2.0));
+        #[cfg(not(feature = "parallel"))]
+        (half(1.0), half(2.0));
+        let two = start.elapsed().as_secs_f64();
+        gains.push(2.0 * one / two.max(1e-12));
+    }
+    median(gains)
+}
+
 /// Threads the step uses: rayon's current pool with the `parallel` feature, else 1.
 pub fn threads() -> usize {
     #[cfg(feature = "parallel")]

@@ -92,6 +92,11 @@ impl Threads {
             .map_err(|e| format!("cannot start the threads: {e}"))
     }
 
+    /// How many threads the pool has.
+    fn threads(&self) -> usize {
+        self.pool.current_num_threads()
+    }
+
     /// Runs `f` on these threads.
     fn run<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
         self.pool.install(f)
@@ -209,6 +214,15 @@ fn bench_rows(args: &BenchArgs, pools: &[Threads]) -> ExitCode {
             for line in lines {
                 emit(&format!("  {line}\n"));
             }
+        }
+        // What the machine's two threads gave just now: a two-thread row
+        // is read against it (on a host whose two CPUs share a core it is
+        // near 1, and no step can do better).
+        if let Some(two) = pools.iter().find(|p| p.threads() == 2) {
+            let gain = two.run(cloth3d::cli::bench::two_thread_gain);
+            emit(&format!(
+                "\nhost: two threads did {gain:.2}x one thread's independent arithmetic just after the rows\n"
+            ));
         }
     }
     if let Some(path) = &args.plot {
