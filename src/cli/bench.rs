@@ -154,20 +154,22 @@ pub fn bench_cloth3d(
     })
 }
 
-/// How much more independent arithmetic two threads of rayon's current
-/// pool get through than one (the first of them alone): 2 on two free
-/// cores, about 1 where the two share one (hyperthreads of one core, or a
-/// virtual machine whose second CPU is busy elsewhere). The bench prints it
-/// after its rows, so that a two-thread figure can be read against what the
-/// machine gave at the time. Each half is 8 independent chains of
-/// multiply-adds (no memory traffic: the FPU's throughput), the median of
-/// five tries of about 10 ms; 1 without the `parallel` feature.
+/// How much more arithmetic two threads of rayon's current pool get
+/// through together than one alone: about 2 where each has a core to
+/// itself, about 1 where they take turns on one CPU (a virtual machine
+/// whose two CPUs get one) or share one core's arithmetic units
+/// (hyperthreads). It does not see memory: two threads that contend for
+/// the cache or memory still read 2. The bench prints it after its rows,
+/// so that a two-thread figure can be read against what the machine gave
+/// at the time. Each thread runs 24 independent chains of multiplies and
+/// adds, enough to keep a core's floating-point units busy; the median of
+/// five tries of about 10 ms (1 without the `parallel` feature).
 pub fn two_thread_gain() -> f64 {
-    /// Multiply-adds a try runs in each half.
-    const STEPS: u64 = 4_000_000;
+    /// Rounds of a try, each a multiply and an add on every chain.
+    const ROUNDS: u64 = 1_500_000;
     fn half(seed: f64) -> f64 {
-        let mut acc = [seed; 8];
-        for _ in 0..STEPS {
+        let mut acc = [seed; 24];
+        for _ in 0..ROUNDS {
             for (k, a) in acc.iter_mut().enumerate() {
                 *a = *a * 0.999_999_9 + 1.0e-7 * k as f64;
             }
