@@ -162,7 +162,9 @@ pub fn bench_cloth3d(
 /// the cache or memory still read 2. The bench prints it after its rows,
 /// so that a two-thread figure can be read against what the machine gave
 /// at the time. Each thread runs 24 independent chains of multiplies and
-/// adds, enough to keep a core's floating-point units busy; the median of
+/// adds, more work in flight than one core's units finish at once (not
+/// checked against hyperthreads, which the machines measured so far do not
+/// expose); the median of
 /// five tries of about 10 ms (1 without the `parallel` feature).
 pub fn two_thread_gain() -> f64 {
     /// Rounds of a try, each a multiply and an add on every chain.
