@@ -155,17 +155,17 @@ pub fn bench_cloth3d(
 }
 
 /// How much more arithmetic two threads of rayon's current pool get
-/// through together than one alone: about 2 where each has a core to
-/// itself, about 1 where they take turns on one CPU (a virtual machine
-/// whose two CPUs get one) or share one core's arithmetic units
-/// (hyperthreads). It does not see memory: two threads that contend for
-/// the cache or memory still read 2. The bench prints it after its rows,
-/// so that a two-thread figure can be read against what the machine gave
-/// at the time. Each thread runs 24 independent chains of multiplies and
-/// adds, more work in flight than one core's units finish at once (not
-/// checked against hyperthreads, which the machines measured so far do not
-/// expose); the median of
-/// five tries of about 10 ms (1 without the `parallel` feature).
+/// through together than one alone: about 2 where each has a CPU to
+/// itself, about 1 where they take turns on one (a virtual machine whose
+/// two CPUs get one, or a machine busy with other work; a build beside it
+/// gave 1.2–1.4). Each thread runs 24 independent chains of multiplies
+/// and adds, more than one core's units finish at once, so two threads
+/// on one core's two hyperthreads should read well under 2 (not checked:
+/// the machines measured so far expose none). It does not see memory: two
+/// threads that contend for the cache or memory still read 2. The bench
+/// prints it after its rows, so that a two-thread figure can be read
+/// against what the machine gave at the time. The median of five tries of
+/// about 10 ms (1 without the `parallel` feature).
 pub fn two_thread_gain() -> f64 {
     /// Rounds of a try, each a multiply and an add on every chain.
     const ROUNDS: u64 = 1_500_000;
