@@ -216,8 +216,8 @@ fn bench_rows(args: &BenchArgs, pools: &[Threads]) -> ExitCode {
             }
         }
         // What the machine's two threads gave just now: a two-thread row
-        // is read against it (on a host whose two CPUs share a core it is
-        // near 1, and no step can do better).
+        // is read against it (where the two CPUs take turns it is near 1,
+        // and no step can do better).
         if let Some(two) = pools.iter().find(|p| p.threads() == 2) {
             let gain = two.run(cloth3d::cli::bench::two_thread_gain);
             emit(&format!(
