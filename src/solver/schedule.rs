@@ -297,6 +297,12 @@ impl ClothSolver {
         // the cloth's.
         let (self_team, team) = (teams.all, teams.cloth);
         let h = dt / k as f32;
+        // What each self-collision pass of the step works with.
+        let self_params = SelfContactParams {
+            thickness: layer,
+            friction: cloth.params.self_friction,
+            h,
+        };
         // The limit after a substep of an integrator that does not hold it
         // itself: relaxed passes (`limit_stretch_relaxed`) while the
         // substep is within the integrator's stability limit, the plain
@@ -397,11 +403,10 @@ impl ClothSolver {
             let mut self_touching = 0;
             if cloth.params.self_collision {
                 let (selfc, topology) = (&mut ws.self_contacts, &*cloth.topology);
-                let thickness = layer;
                 let look = &mut self.state.self_look;
                 if selfc.due(look, &cloth.particles.x) {
                     let looked = std::time::Instant::now();
-                    let basis = look_basis(cloth, thickness);
+                    let basis = look_basis(cloth, layer);
                     let p = &cloth.particles;
                     selfc.find(look, (&p.x, &p.v, h), &basis, self_team);
                     report.self_looks += 1;
@@ -412,16 +417,8 @@ impl ClothSolver {
                     ws.before_self.clear();
                     ws.before_self.extend_from_slice(&cloth.particles.x);
                 }
-                self_touching = selfc.resolve(
-                    &mut cloth.particles,
-                    topology,
-                    &SelfContactParams {
-                        thickness,
-                        friction: cloth.params.self_friction,
-                        h,
-                    },
-                    self_team,
-                );
+                self_touching =
+                    selfc.resolve(&mut cloth.particles, topology, &self_params, self_team);
                 report.self_contacts += self_touching;
                 watch.lap(&mut times.self_collision);
             }
@@ -589,11 +586,7 @@ impl ClothSolver {
                 let parted = ws.self_contacts.resolve(
                     &mut cloth.particles,
                     &cloth.topology,
-                    &SelfContactParams {
-                        thickness: layer,
-                        friction: cloth.params.self_friction,
-                        h,
-                    },
+                    &self_params,
                     self_team,
                 );
                 report.self_contacts += parted;
