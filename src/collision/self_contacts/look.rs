@@ -111,19 +111,15 @@ impl Look<'_> {
         neighbours: &MeshNeighbours,
     ) -> Option<SelfPair> {
         let d = (xp - f.a).dot(f.n);
-        if d.abs() >= self.reach || f.sheet.holds(p) {
+        if d.abs() >= self.reach {
             return None;
         }
         let [u, v, w] = barycentric(xp - f.n * d - f.a, f.e1, f.e2);
         let slack = f.slack;
-        if u < -slack[0] || v < -slack[1] || w < -slack[2] || neighbours.left_to_springs(p, f.tri) {
+        if u < -slack[0] || v < -slack[1] || w < -slack[2] {
             return None;
         }
-        Some(SelfPair {
-            particle: p,
-            triangle: f.t,
-            side: self.side_before(f.tri, p).unwrap_or(side_at(d)),
-        })
+        self.sheet_pair(f, (p, d), neighbours)
     }
 
     /// The pair of particle `p` with triangle `f`, whose plane it lies `d`
@@ -335,11 +331,14 @@ impl Look<'_> {
                 _mm256_mul_ps(dz, splat(n.z)),
             );
             let near = _mm256_cmp_ps::<_CMP_NGE_UQ>(_mm256_and_ps(d, abs), reach);
-            // The projection's barycentrics.
+            // The projection's barycentrics, in `Look::pair`'s and
+            // `barycentric`'s operations and order: here their numerators,
+            // by the inverse for the vector test (looser), and divided
+            // below for the steps it lets anything through.
             let (qx, qy, qz) = (
-                _mm256_sub_ps(dx, _mm256_mul_ps(splat(n.x), d)),
-                _mm256_sub_ps(dy, _mm256_mul_ps(splat(n.y), d)),
-                _mm256_sub_ps(dz, _mm256_mul_ps(splat(n.z), d)),
+                _mm256_sub_ps(_mm256_sub_ps(x, _mm256_mul_ps(splat(n.x), d)), splat(a.x)),
+                _mm256_sub_ps(_mm256_sub_ps(y, _mm256_mul_ps(splat(n.y), d)), splat(a.y)),
+                _mm256_sub_ps(_mm256_sub_ps(z, _mm256_mul_ps(splat(n.z), d)), splat(a.z)),
             );
             let dot = |e: Vector| {
                 _mm256_add_ps(
@@ -348,28 +347,25 @@ impl Look<'_> {
                 )
             };
             let (dq1, dq2) = (dot(e1), dot(e2));
-            let vb = _mm256_mul_ps(
-                _mm256_sub_ps(
-                    _mm256_mul_ps(splat(d22), dq1),
-                    _mm256_mul_ps(splat(d12), dq2),
-                ),
-                inv,
+            let vb_top = _mm256_sub_ps(
+                _mm256_mul_ps(splat(d22), dq1),
+                _mm256_mul_ps(splat(d12), dq2),
             );
-            let w = _mm256_mul_ps(
-                _mm256_sub_ps(
-                    _mm256_mul_ps(splat(d11), dq2),
-                    _mm256_mul_ps(splat(d12), dq1),
-                ),
-                inv,
+            let w_top = _mm256_sub_ps(
+                _mm256_mul_ps(splat(d11), dq2),
+                _mm256_mul_ps(splat(d12), dq1),
             );
-            let u = _mm256_sub_ps(_mm256_sub_ps(one, vb), w);
-            let inside = _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_NLT_UQ>(u, slack[0]),
+            let inside = |[u, vb, w]: [__m256; 3], slack: [__m256; 3]| {
                 _mm256_and_ps(
-                    _mm256_cmp_ps::<_CMP_NLT_UQ>(vb, slack[1]),
-                    _mm256_cmp_ps::<_CMP_NLT_UQ>(w, slack[2]),
-                ),
-            );
+                    _mm256_cmp_ps::<_CMP_NLT_UQ>(u, slack[0]),
+                    _mm256_and_ps(
+                        _mm256_cmp_ps::<_CMP_NLT_UQ>(vb, slack[1]),
+                        _mm256_cmp_ps::<_CMP_NLT_UQ>(w, slack[2]),
+                    ),
+                )
+            };
+            let bary = |vb, w| [_mm256_sub_ps(_mm256_sub_ps(one, vb), w), vb, w];
+            let loose = bary(_mm256_mul_ps(vb_top, inv), _mm256_mul_ps(w_top, inv));
             // Not a corner (the padding is outside every box).
             let corner = _mm256_or_si256(
                 _mm256_cmpeq_epi32(p, corner[0]),
@@ -380,51 +376,20 @@ impl Look<'_> {
             );
             let keep = _mm256_andnot_ps(
                 _mm256_castsi256_ps(corner),
-                _mm256_and_ps(_mm256_and_ps(boxed, near), inside),
+                _mm256_and_ps(_mm256_and_ps(boxed, near), inside(loose, slack)),
             );
             if _mm256_movemask_ps(keep) != 0 {
                 // Those let through, tested again exactly as `Look::pair`
                 // does: the same operations in the same order on the same
-                // floats (the box is already; the distance `d` too), so the
-                // same answers, with the division; then what is not a
-                // number's work (the sheet, the springs, the side) one at
-                // a time. A third of the look went to taking each of them
-                // through `Look::candidate` from the start.
-                let (qx, qy, qz) = (
-                    _mm256_sub_ps(_mm256_sub_ps(x, _mm256_mul_ps(splat(n.x), d)), splat(a.x)),
-                    _mm256_sub_ps(_mm256_sub_ps(y, _mm256_mul_ps(splat(n.y), d)), splat(a.y)),
-                    _mm256_sub_ps(_mm256_sub_ps(z, _mm256_mul_ps(splat(n.z), d)), splat(a.z)),
-                );
-                let dot = |e: Vector| {
-                    _mm256_add_ps(
-                        _mm256_add_ps(_mm256_mul_ps(qx, splat(e.x)), _mm256_mul_ps(qy, splat(e.y))),
-                        _mm256_mul_ps(qz, splat(e.z)),
-                    )
-                };
-                let (dq1, dq2) = (dot(e1), dot(e2));
-                let vb = _mm256_div_ps(
-                    _mm256_sub_ps(
-                        _mm256_mul_ps(splat(d22), dq1),
-                        _mm256_mul_ps(splat(d12), dq2),
-                    ),
-                    splat(denom),
-                );
-                let w = _mm256_div_ps(
-                    _mm256_sub_ps(
-                        _mm256_mul_ps(splat(d11), dq2),
-                        _mm256_mul_ps(splat(d12), dq1),
-                    ),
-                    splat(denom),
-                );
-                let u = _mm256_sub_ps(_mm256_sub_ps(one, vb), w);
+                // floats (the box and the distance `d` are already), so
+                // the same answers; then what is not a number's work (the
+                // sheet, the springs, the side) one at a time. A third of
+                // the look went to taking each of them through
+                // `Look::candidate` from the start.
+                let denom = splat(denom);
+                let exact = bary(_mm256_div_ps(vb_top, denom), _mm256_div_ps(w_top, denom));
                 let near = _mm256_cmp_ps::<_CMP_NGE_UQ>(_mm256_and_ps(d, abs), splat(self.reach));
-                let inside = _mm256_and_ps(
-                    _mm256_cmp_ps::<_CMP_NLT_UQ>(u, splat(-f.slack[0])),
-                    _mm256_and_ps(
-                        _mm256_cmp_ps::<_CMP_NLT_UQ>(vb, splat(-f.slack[1])),
-                        _mm256_cmp_ps::<_CMP_NLT_UQ>(w, splat(-f.slack[2])),
-                    ),
-                );
+                let inside = inside(exact, f.slack.map(|s| splat(-s)));
                 let pair = _mm256_and_ps(keep, _mm256_and_ps(near, inside));
                 let mut bits = _mm256_movemask_ps(pair) as u32;
                 let mut ds = [0.0f32; LANES];
