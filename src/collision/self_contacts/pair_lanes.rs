@@ -194,10 +194,11 @@ impl PairLanes {
             // wider: a pair the pass leaves at the thinned thickness is
             // not taken again every substep.
             let zero = _mm256_setzero_ps();
-            // Each share by the slack's approximate inverse (relative error
-            // under 7.4e-4 squared), their sum shrunk by 1e-3: never more
-            // than the quotients' sum, so the thinned thickness below is
-            // never less (no division: its latency held the test up).
+            // Each share by the slack's approximate inverse (squared,
+            // within 7.4e-4 of the quotient's), their sum shrunk by 1e-3:
+            // never more than the quotients' sum, so the thinned thickness
+            // below is never less (no division: its latency held the test
+            // up).
             let share = |bary: __m256, slack: __m256| {
                 let r = m(
                     _mm256_min_ps(_mm256_add_ps(bary, splat(tol)), zero),
