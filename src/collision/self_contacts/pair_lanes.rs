@@ -216,7 +216,7 @@ impl PairLanes {
             let past = _mm256_sub_ps(dist, splat(thickness * tol));
             let full = thickness * (1.0 + tol);
             let thin = _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_GE_OQ>(past, zero),
+                ge(past, zero),
                 ge(m(past, past), m(kept2, splat(full * full))),
             );
             // A degenerate triangle: left to the pass itself.
